@@ -1,0 +1,41 @@
+"""Python packaging for hop_impedance (also used by colcon's ament_python build)."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = "hop_impedance"
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    packages=find_packages(include=[PACKAGE, f"{PACKAGE}.*"]),
+    package_data={PACKAGE: ["py.typed", "data/*.yaml"]},
+    data_files=[
+        ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
+        (f"share/{PACKAGE}", ["package.xml"]),
+        (f"share/{PACKAGE}/launch", glob("launch/*.py")),
+        (f"share/{PACKAGE}/config", glob("config/*.yaml")),
+    ],
+    python_requires=">=3.10",
+    install_requires=[
+        "numpy>=1.24",
+        "scipy>=1.11",
+        "osqp>=1.0",
+        "mcap>=1.2",
+        "mcap-ros2-support>=0.5",
+        "pyyaml>=6",
+        "matplotlib>=3.7",
+    ],
+    extras_require={"viz": ["rerun-sdk>=0.41"]},
+    zip_safe=True,
+    maintainer="hop_impedance developers",
+    maintainer_email="hop-impedance@localhost",
+    description="Stance-by-stance joint stiffness and damping of human hopping, as ROS 2 nodes",
+    license="Apache-2.0",
+    entry_points={
+        "console_scripts": [
+            "hop-impedance = hop_impedance.cli.main:main",
+        ],
+    },
+)
