@@ -30,7 +30,7 @@ setup(
     extras_require={"viz": ["rerun-sdk>=0.41"]},
     zip_safe=True,
     maintainer="hop_impedance developers",
-    maintainer_email="hop-impedance@localhost",
+    maintainer_email="maintainers@hop-impedance.invalid",
     description="Stance-by-stance joint stiffness and damping of human hopping, as ROS 2 nodes",
     license="Apache-2.0",
     entry_points={

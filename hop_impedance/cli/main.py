@@ -1,6 +1,88 @@
-"""The ``hop-impedance`` command (placeholder until the sub-commands land)."""
+"""The ``hop-impedance`` command: one entry point, one sub-command per workflow.
+
+Each sub-command lives in its own module ``hop_impedance/cli/<name>_cmd.py``
+exposing ``register(subparsers)``, which adds its parser and sets
+``func=run``. Heavy imports (rclpy, scipy, rerun) happen inside ``run`` so that
+``--help`` stays fast and side-effect free.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import sys
+
+# Order shown in --help.
+COMMAND_MODULES: tuple[str, ...] = (
+    "analyze",
+    "simulate",
+    "discover",
+    "view",
+    "replay",
+    "pipeline",
+    "import",
+    "info",
+)
+
+DESCRIPTION = """\
+Stance-by-stance stiffness and damping of the ankle, knee and hip in hopping.
+
+Typical use:
+  hop-impedance info REC.mcap                 what a recording holds
+  hop-impedance analyze REC.mcap --json OUT   stances, inverse dynamics and impedance fits
+  hop-impedance simulate --freq 2.2 --out REC.mcap
+  hop-impedance pipeline --recording REC.mcap the ROS 2 node graph on a replayed recording
+  hop-impedance view REC.mcap --save OUT.rrd  Rerun views of a session
+  hop-impedance discover REC.mcap --json OUT  name the effect a simulation misses
+  hop-impedance import SESSION.c3d --out REC.mcap
+"""
 
 
-def main(argv=None) -> int:
-    print("hop-impedance: sub-commands are being built")
-    return 0
+def build_parser() -> argparse.ArgumentParser:
+    """Parser with every sub-command whose module is present."""
+    parser = argparse.ArgumentParser(
+        prog="hop-impedance",
+        description=DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--version", action="version", version="%(prog)s " + _version())
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        try:
+            module = importlib.import_module(f"hop_impedance.cli.{name}_cmd")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"hop_impedance.cli.{name}_cmd":
+                continue
+            raise
+        module.register(sub)
+    return parser
+
+
+def _version() -> str:
+    from hop_impedance import __version__
+
+    return __version__
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run a sub-command; expected problems print one line and exit 2."""
+    # Network rule: DDS discovery stays on this machine unless the user says otherwise.
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 0
+    try:
+        result = args.func(args)
+    except (ValueError, FileNotFoundError, OSError) as exc:
+        print(f"hop-impedance {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    return int(result or 0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+"""Generate and compile the ``hop_impedance_msgs`` interface package into the venv.
+
+Uses the PyPI ROS 2 wheels (ament_cmake, rosidl generators) with Debian's cmake
+and g++. Installed into the virtual environment's prefix, so nothing needs to be
+sourced at run time: ``from hop_impedance_msgs.msg import MarkerArray`` works in
+rclpy.
+
+Two things make this work with the wheels (see shared/notes/ROS2_FROM_PYPI.md):
+
+1. Some ``*Export.cmake`` files of the wheels name the wheel builder's Python
+   and numpy include directories (``/opt/python/...``); cmake refuses
+   non-existent include paths, so they are rewritten to this interpreter's.
+2. ``AMENT_PREFIX_PATH`` and ``CMAKE_PREFIX_PATH`` point at the venv prefix.
+
+The build is skipped when the .msg files, CMakeLists.txt and package.xml are
+unchanged since the last successful build (a hash stamp in the build folder).
+
+Usage: ``.venv/bin/python scripts/build_msgs.py [--force]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import os
+import re
+import subprocess
+import sys
+import sysconfig
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PKG_DIR = ROOT / "msg_defs"
+BUILD_DIR = ROOT / "build" / "hop_impedance_msgs"
+WHEEL_BUILDER_PATH = re.compile(r"/opt/python/cp3\d+-cp3\d+/(include/python3\.\d+|lib/python3\.\d+/site-packages/numpy/_core/include)")
+
+
+def source_hash() -> str:
+    """Hash of everything that defines the generated package."""
+    h = hashlib.sha256()
+    files = sorted(PKG_DIR.glob("msg/*.msg")) + [PKG_DIR / "CMakeLists.txt", PKG_DIR / "package.xml"]
+    for f in files:
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    h.update(sys.prefix.encode())
+    return h.hexdigest()
+
+
+def fix_wheel_cmake_paths(prefix: Path) -> int:
+    """Rewrite the wheel builder's include paths in the prefix's cmake files; returns files changed."""
+    import numpy
+
+    python_include = sysconfig.get_paths()["include"]
+    numpy_include = numpy.get_include()
+
+    def replace(match: re.Match) -> str:
+        return python_include if match.group(1).startswith("include") else numpy_include
+
+    changed = 0
+    for path in (prefix / "share").glob("*/cmake/*.cmake"):
+        text = path.read_text(encoding="utf-8", errors="surrogateescape")
+        new = WHEEL_BUILDER_PATH.sub(replace, text)
+        if new != text:
+            path.write_text(new, encoding="utf-8", errors="surrogateescape")
+            changed += 1
+    return changed
+
+
+def run(cmd: list[str], env: dict[str, str]) -> None:
+    print("+", " ".join(cmd), flush=True)
+    subprocess.run(cmd, check=True, env=env, cwd=ROOT)
+
+
+def build(prefix: Path) -> None:
+    env = dict(os.environ)
+    env["AMENT_PREFIX_PATH"] = str(prefix)
+    env["CMAKE_PREFIX_PATH"] = str(prefix)
+    jobs = str(max(1, os.cpu_count() or 1))
+    run(
+        [
+            "cmake", "-S", str(PKG_DIR), "-B", str(BUILD_DIR),
+            f"-DCMAKE_PREFIX_PATH={prefix}",
+            f"-DCMAKE_INSTALL_PREFIX={prefix}",
+            f"-DPython3_EXECUTABLE={sys.executable}",
+            "-DCMAKE_BUILD_TYPE=Release",
+            "-DBUILD_TESTING=OFF",
+        ],
+        env,
+    )
+    run(["cmake", "--build", str(BUILD_DIR), "-j", jobs], env)
+    run(["cmake", "--install", str(BUILD_DIR)], env)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--force", action="store_true", help="rebuild even if nothing changed")
+    args = parser.parse_args()
+    prefix = Path(sys.prefix)
+    if prefix == Path(sys.base_prefix):
+        print("build_msgs: run this with the project's virtual environment's python", file=sys.stderr)
+        return 2
+    stamp = BUILD_DIR / ".source_hash"
+    digest = source_hash()
+    if not args.force and stamp.exists() and stamp.read_text() == digest:
+        print("hop_impedance_msgs: up to date")
+        return 0
+    n = fix_wheel_cmake_paths(prefix)
+    if n:
+        print(f"build_msgs: fixed wheel include paths in {n} cmake file(s)")
+    build(prefix)
+    stamp.write_text(digest)
+    print("hop_impedance_msgs: built and installed into", prefix)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
