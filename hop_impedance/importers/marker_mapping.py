@@ -1,0 +1,189 @@
+"""Marker mapping: from a lab's marker labels to the contract's six markers.
+
+A mapping is a small YAML file (ready ones ship in
+``hop_impedance/data/marker_maps/``; see ``docs/importing.md``)::
+
+    name: opencap_right
+    markers:            # contract name -> lab labels, first one present wins
+      toe: [r_5meta]
+      heel: [r_calc]
+      ...
+    forward_pairs:      # rear -> front label pairs to detect the heading
+      - [r_calc, r_toe]
+
+Labels match exactly first, then ignoring case and a ``Subject:`` prefix (as
+Vicon Nexus writes ``Anna:RTOE``).
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from hop_impedance.recording import MARKER_NAMES
+
+#: Folder holding the ready mappings shipped with the package.
+MAPPINGS_DIR = Path(__file__).resolve().parent.parent / "data" / "marker_maps"
+
+
+class MissingMarkersError(ValueError):
+    """The session lacks labels that the marker mapping needs; the message names them."""
+
+
+@dataclass(frozen=True)
+class MarkerMapping:
+    """Lab labels for each contract marker.
+
+    Attributes
+    ----------
+    name : str
+    candidates : dict of str -> tuple of str
+        For each of :data:`MARKER_NAMES`, the lab labels to try, in order.
+    forward_pairs : tuple of (str, str)
+        Rear -> front label pairs whose horizontal direction is the heading.
+    """
+
+    name: str
+    candidates: dict[str, tuple[str, ...]]
+    forward_pairs: tuple[tuple[str, str], ...] = ()
+
+
+def available_mappings() -> list[str]:
+    """Names of the ready mappings shipped with the package (sorted)."""
+    return sorted(p.stem for p in MAPPINGS_DIR.glob("*.yaml"))
+
+
+def load_marker_mapping(name_or_path: str | Path) -> MarkerMapping:
+    """Load a mapping by shipped name (``"opencap_right"``) or YAML path.
+
+    Raises
+    ------
+    ValueError
+        If the name is unknown, or the file lacks a contract marker or is malformed.
+    """
+    path = Path(name_or_path)
+    if not path.suffix and not path.exists():
+        path = MAPPINGS_DIR / f"{name_or_path}.yaml"
+        if not path.exists():
+            raise ValueError(
+                f"unknown marker mapping {str(name_or_path)!r}; shipped ones: {', '.join(available_mappings())}, "
+                "or give a YAML file"
+            )
+    with open(path, encoding="utf-8") as fh:
+        doc = yaml.safe_load(fh) or {}
+    return mapping_from_dict(doc, default_name=path.stem, where=str(path))
+
+
+def mapping_from_dict(doc: dict, default_name: str = "custom", where: str = "mapping") -> MarkerMapping:
+    """Build a :class:`MarkerMapping` from a parsed YAML document (see module docstring)."""
+    markers = doc.get("markers")
+    if not isinstance(markers, dict):
+        raise ValueError(f"{where}: needs a 'markers' table from contract names to lab labels")
+    missing = [m for m in MARKER_NAMES if m not in markers]
+    unknown = [m for m in markers if m not in MARKER_NAMES]
+    if missing or unknown:
+        raise ValueError(
+            f"{where}: 'markers' must map exactly the contract markers {', '.join(MARKER_NAMES)}"
+            + (f"; missing {', '.join(missing)}" if missing else "")
+            + (f"; unknown {', '.join(map(str, unknown))}" if unknown else "")
+        )
+    candidates = {
+        m: tuple(str(v) for v in (markers[m] if isinstance(markers[m], list) else [markers[m]])) for m in MARKER_NAMES
+    }
+    pairs = tuple((str(a), str(b)) for a, b in doc.get("forward_pairs", []) or [])
+    return MarkerMapping(str(doc.get("name", default_name)), candidates, pairs)
+
+
+def _normalise(label: str) -> str:
+    return label.split(":")[-1].strip().lower()
+
+
+def find_label(labels: list[str] | tuple[str, ...], wanted: str) -> int | None:
+    """Index of ``wanted`` among ``labels``: exact, else case- and prefix-insensitive; None if absent."""
+    if wanted in labels:
+        return list(labels).index(wanted)
+    norm = [_normalise(x) for x in labels]
+    w = _normalise(wanted)
+    return norm.index(w) if w in norm else None
+
+
+def resolve_labels(labels: list[str] | tuple[str, ...], mapping: MarkerMapping) -> dict[str, int]:
+    """Column index of each contract marker among the file's labels.
+
+    Returns
+    -------
+    dict of str -> int
+        One entry per contract marker.
+
+    Raises
+    ------
+    MissingMarkersError
+        Naming every contract marker that has none of its labels in the file,
+        the labels tried and the closest labels present.
+    """
+    found: dict[str, int] = {}
+    problems = []
+    for name in MARKER_NAMES:
+        hits = [find_label(labels, c) for c in mapping.candidates[name]]
+        hits = [h for h in hits if h is not None]
+        if hits:
+            found[name] = hits[0]
+            continue
+        near = sorted(
+            {x for c in mapping.candidates[name] for x in difflib.get_close_matches(c, list(labels), n=2, cutoff=0.6)}
+        )
+        problems.append(
+            f"{name} (tried {', '.join(mapping.candidates[name])}"
+            + (f"; closest in file: {', '.join(near)}" if near else "")
+            + ")"
+        )
+    if problems:
+        raise MissingMarkersError(
+            f"marker mapping {mapping.name!r}: missing markers: {'; '.join(problems)}. "
+            "Give another mapping (--markers NAME or YAML)"
+        )
+    return found
+
+
+def contract_markers(labels: list[str] | tuple[str, ...], positions: np.ndarray, mapping: MarkerMapping) -> np.ndarray:
+    """The six contract markers picked out of a lab session.
+
+    Parameters
+    ----------
+    labels : sequence of str, length L
+        The file's marker labels.
+    positions : ndarray, shape (M, L, 3)
+        All markers' positions (any unit, lab frame; NaN for occluded).
+    mapping : MarkerMapping
+
+    Returns
+    -------
+    ndarray, shape (M, 6, 3)
+        Positions in :data:`MARKER_NAMES` order.
+    """
+    idx = resolve_labels(labels, mapping)
+    return positions[:, [idx[m] for m in MARKER_NAMES], :]
+
+
+def forward_pair_positions(
+    labels: list[str] | tuple[str, ...], positions: np.ndarray, mapping: MarkerMapping
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Rear and front positions, shape (M, 3) each, of the mapping's forward pairs present in the file.
+
+    Falls back to the mapped heel -> toe when none of the pairs is present.
+    """
+    rear, front = [], []
+    for a, b in mapping.forward_pairs:
+        ia, ib = find_label(labels, a), find_label(labels, b)
+        if ia is not None and ib is not None:
+            rear.append(positions[:, ia, :])
+            front.append(positions[:, ib, :])
+    if not rear:
+        idx = resolve_labels(labels, mapping)
+        rear.append(positions[:, idx["heel"], :])
+        front.append(positions[:, idx["toe"], :])
+    return rear, front
