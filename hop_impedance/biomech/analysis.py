@@ -1,0 +1,409 @@
+"""Batch analysis of a recording: stances, kinematics, inverse dynamics, per-stance metrics.
+
+``analyze_recording`` runs every stage over the whole record at once. The
+streaming stage (:mod:`hop_impedance.biomech.stages`) runs the *same*
+:func:`analyze_span` on a window around each stance as the data arrive; see
+there for the agreement between the two.
+
+Pipeline (all times in seconds since the recording's first message)
+-------------------------------------------------------------------
+1. Stance detection on the raw vertical force (:class:`StanceDetector`,
+   which tracks the flight baseline itself).
+2. Plate zeroing: offsets measured in each flight, interpolated between
+   flight centres (:mod:`force_plate`).
+3. Zero-lag low-pass of the wrench at ``force_cutoff_hz`` (default = the
+   marker cut-off, 12 Hz; see :mod:`filtering`).
+4. Kinematics from markers, filtered at ``marker_cutoff_hz`` and resampled
+   onto force-plate time (:mod:`kinematics`).
+5. Inverse dynamics on every force frame (:mod:`inverse_dynamics`).
+6. Per stance: timing, peak force (zeroed, *unfiltered* Fz: filtering would
+   lower the impact peak), joint series, work, stiffness
+   (:mod:`stance_metrics`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hop_impedance.biomech.body_model import BodyModel
+from hop_impedance.biomech.filtering import DEFAULT_CUTOFF_HZ, DEFAULT_MAX_GAP_S, Gap, lowpass, sampling_rate_hz
+from hop_impedance.biomech.force_plate import (
+    DEFAULT_FLIGHT_MARGIN_S,
+    flight_intervals,
+    flight_offsets,
+    sagittal_wrench,
+    subtract_offsets,
+)
+from hop_impedance.biomech.inverse_dynamics import inverse_dynamics_2d, joint_power
+from hop_impedance.biomech.joint_angles import JOINT_NAMES
+from hop_impedance.biomech.kinematics import Kinematics, body_model_from_markers, compute_kinematics, sagittal_markers
+from hop_impedance.biomech.stance_detection import DetectorOptions, Stance, detect_stances
+from hop_impedance.biomech.stance_metrics import (
+    com_displacement_from_grf,
+    hip_excursion,
+    joint_work,
+    leg_stiffness,
+    overall_joint_stiffness,
+)
+from hop_impedance.recording import FORCE_TOPIC, GRAVITY_M_S2, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, Recording, Subject
+
+
+@dataclass(frozen=True)
+class AnalysisOptions:
+    """Parameters of the analysis (defaults documented in the modules named).
+
+    Attributes
+    ----------
+    marker_cutoff_hz, force_cutoff_hz : float
+        Low-pass cut-offs (Hz), :mod:`filtering`; equal by default.
+    max_gap_s : float
+        Longest marker gap filled by interpolation (s).
+    detector : DetectorOptions
+        Stance detection thresholds.
+    flight_margin_s : float
+        Margin at flight ends ignored by the plate zeroing (s).
+    pad_s : float
+        Data kept on each side of a stance by the streaming stage (s).
+    body_model : BodyModel or None
+        Use this model instead of scaling one from the markers.
+    overrides : dict or None
+        Per-segment overrides applied to the scaled model.
+    """
+
+    marker_cutoff_hz: float = DEFAULT_CUTOFF_HZ
+    force_cutoff_hz: float = DEFAULT_CUTOFF_HZ
+    max_gap_s: float = DEFAULT_MAX_GAP_S
+    detector: DetectorOptions = field(default_factory=DetectorOptions)
+    flight_margin_s: float = DEFAULT_FLIGHT_MARGIN_S
+    pad_s: float = 0.3
+    body_model: BodyModel | None = None
+    overrides: dict | None = None
+
+
+@dataclass
+class JointSeries:
+    """Per-stance joint data, sampled at the force-plate rate from touchdown to take-off.
+
+    Attributes
+    ----------
+    time_s : ndarray, shape (n,)
+        Time since touchdown (s).
+    angle_rad, angular_velocity_rad_s, moment_nm, power_w : ndarray, shape (n, 3)
+        rho (rad, increases with flexion), d(rho)/dt (rad/s), net moment of
+        both legs (N m, extensor positive), power (W); columns ankle, knee, hip.
+    """
+
+    time_s: np.ndarray
+    angle_rad: np.ndarray
+    angular_velocity_rad_s: np.ndarray
+    moment_nm: np.ndarray
+    power_w: np.ndarray
+
+    def joint(self, name: str) -> dict[str, np.ndarray]:
+        """Arrays of one joint (``ankle``, ``knee`` or ``hip``), each shape (n,)."""
+        j = JOINT_NAMES.index(name)
+        return {
+            "time_s": self.time_s,
+            "angle_rad": self.angle_rad[:, j],
+            "angular_velocity_rad_s": self.angular_velocity_rad_s[:, j],
+            "moment_nm": self.moment_nm[:, j],
+            "power_w": self.power_w[:, j],
+        }
+
+
+@dataclass
+class StanceResult:
+    """Everything computed for one stance; NaN/None where not available.
+
+    ``rejection_reason`` is None for a stance whose joint data may be fitted.
+    """
+
+    index: int
+    touchdown_s: float
+    takeoff_s: float
+    complete: bool
+    rejection_reason: str | None
+    contact_time_s: float
+    peak_grf_n: float
+    peak_grf_bw: float
+    flight_before_s: float | None
+    flight_after_s: float | None
+    hop_frequency_hz: float | None
+    leg_stiffness_n_per_m: float = float("nan")
+    leg_stiffness_kinematic_n_per_m: float = float("nan")
+    com_drop_grf_m: float = float("nan")
+    com_drop_kinematic_m: float = float("nan")
+    hip_excursion_m: float = float("nan")
+    joints: JointSeries | None = None
+    brake_work_j: np.ndarray | None = None
+    push_work_j: np.ndarray | None = None
+    overall_stiffness_nm_per_rad: np.ndarray | None = None
+    hip_residual_rms_nm: float = float("nan")
+
+
+@dataclass
+class RecordingAnalysis:
+    """Result of :func:`analyze_recording`."""
+
+    subject: Subject
+    model: BodyModel | None
+    start_ns: int
+    recording: dict
+    stances: list[StanceResult]
+    warnings: list[str] = field(default_factory=list)
+
+
+@dataclass
+class SpanData:
+    """Raw data of a time span, on one clock (s since the recording's start).
+
+    Attributes
+    ----------
+    force_t_s : ndarray, shape (N,)
+    wrench : ndarray, shape (N, 3)
+        Raw sagittal wrench ``[Fx, Fz, Mo]`` (:func:`force_plate.sagittal_wrench`).
+    marker_t_s : ndarray, shape (M,) or None
+    markers_xz : ndarray, shape (M, 6, 2) or None
+    """
+
+    force_t_s: np.ndarray
+    wrench: np.ndarray
+    marker_t_s: np.ndarray | None = None
+    markers_xz: np.ndarray | None = None
+
+
+def stance_timing(stances: list[Stance], k: int) -> tuple[float | None, float | None, float | None]:
+    """Flight before, flight after (s) and hop frequency (Hz) of stance ``k``.
+
+    Flights are measured between neighbouring stances' events. Hop frequency
+    is 1 / (next touchdown - this touchdown), or 1 / (this - previous
+    touchdown) for the last stance; None where no real touchdown pair exists
+    (a touchdown cut by the start is not an event).
+    """
+    s = stances[k]
+    before = s.touchdown_s - stances[k - 1].takeoff_s if k > 0 else None
+    after = stances[k + 1].touchdown_s - s.takeoff_s if k + 1 < len(stances) else None
+    freq = None
+    if k + 1 < len(stances) and not s.cut_start:
+        freq = 1.0 / (stances[k + 1].touchdown_s - s.touchdown_s)
+    elif k > 0 and not s.cut_start and not stances[k - 1].cut_start:
+        freq = 1.0 / (s.touchdown_s - stances[k - 1].touchdown_s)
+    return before, after, freq
+
+
+def _gap_reason(gaps: list[Gap], t0: float, t1: float, max_gap_s: float) -> str | None:
+    for g in gaps:
+        if not g.filled and g.end_s >= t0 and g.start_s <= t1:
+            name = MARKER_NAMES[g.column]
+            if not np.isfinite(g.duration_s):
+                return f"marker {name} missing at the edge of the marker data"
+            return f"marker gap of {g.duration_s:.2f} s in {name} exceeds {max_gap_s:.2f} s"
+    return None
+
+
+def analyze_span(
+    data: SpanData,
+    stances: list[Stance],
+    targets: list[int],
+    model: BodyModel | None,
+    body_mass_kg: float,
+    options: AnalysisOptions,
+) -> list[StanceResult]:
+    """Zeroing, filtering, kinematics, inverse dynamics and metrics of the stances ``targets``.
+
+    Parameters
+    ----------
+    data : SpanData
+        Must cover the target stances plus their neighbouring flights.
+    stances : list of Stance
+        All stances known (used for flights and timing).
+    targets : list of int
+        Indices into ``stances`` to compute.
+    model : BodyModel or None
+        None when there are no markers (only force-based figures are filled).
+    body_mass_kg : float
+    options : AnalysisOptions
+
+    Returns
+    -------
+    list of StanceResult, one per target.
+    """
+    t = data.force_t_s
+    times = [(s.touchdown_s, s.takeoff_s) for s in stances]
+    flights = flight_intervals(times, float(t[0]), float(t[-1]))
+    centres, offsets = flight_offsets(t, data.wrench, flights, options.flight_margin_s)
+    zeroed = subtract_offsets(t, data.wrench, centres, offsets)
+    kin = loads = None
+    gaps: list[Gap] = []
+    span_reason = None
+    if model is None or data.marker_t_s is None or len(data.marker_t_s) < 8:
+        span_reason = "no marker data"
+    else:
+        fs = sampling_rate_hz(t)
+        smooth = lowpass(zeroed, fs, options.force_cutoff_hz)
+        kin, gaps = compute_kinematics(
+            data.marker_t_s, data.markers_xz, t, model, options.marker_cutoff_hz, options.max_gap_s
+        )
+        loads = inverse_dynamics_2d(kin.points_xz, kin.com_xz, kin.com_acc, kin.qdd, smooth, model)
+    weight = body_mass_kg * GRAVITY_M_S2
+    return [_stance_result(k, stances, t, zeroed, kin, loads, gaps, span_reason, model, body_mass_kg, weight, options) for k in targets]
+
+
+def _stance_result(k, stances, t, zeroed, kin, loads, gaps, span_reason, model, mass, weight, options) -> StanceResult:
+    s = stances[k]
+    sel = (t >= s.touchdown_s) & (t <= s.takeoff_s)
+    fz = zeroed[sel, 1]
+    peak = float(np.max(fz)) if fz.size else float("nan")
+    before, after, freq = stance_timing(stances, k)
+    res = StanceResult(
+        k, s.touchdown_s, s.takeoff_s, s.complete, s.rejection_reason, s.contact_time_s,
+        peak, peak / weight, before, after, freq,
+    )
+    if res.rejection_reason is None and np.count_nonzero(sel) < 10:
+        res.rejection_reason = f"too few force samples in stance: {np.count_nonzero(sel)} < 10"
+    if res.rejection_reason is not None:
+        return res
+    ts = t[sel]
+    disp = com_displacement_from_grf(ts, fz, mass)
+    res.com_drop_grf_m = -float(np.min(disp))
+    res.leg_stiffness_n_per_m = leg_stiffness(peak, disp)
+    reason = span_reason or _gap_reason(gaps, s.touchdown_s, s.takeoff_s, options.max_gap_s)
+    if reason is None and not np.all(kin.reliable[sel]):
+        reason = "markers do not cover the whole stance"
+    if reason is not None:
+        res.rejection_reason = reason
+        return res
+    rho, rhod, moment = kin.rho[sel], kin.rhod[sel], loads.moment_nm[sel]
+    power = joint_power(moment, rhod)
+    res.joints = JointSeries(ts - s.touchdown_s, rho, rhod, moment, power)
+    res.brake_work_j, res.push_work_j = joint_work(ts, power)
+    res.overall_stiffness_nm_per_rad = overall_joint_stiffness(rho, moment)
+    body_z = kin.body_com_xz(model)[sel, 1]
+    res.com_drop_kinematic_m = float(body_z[0] - np.min(body_z))
+    res.leg_stiffness_kinematic_n_per_m = leg_stiffness(peak, body_z - body_z[0])
+    res.hip_excursion_m = hip_excursion(kin.points_xz[sel, 3, 1])
+    res.hip_residual_rms_nm = float(np.sqrt(np.mean(loads.hip_residual_moment_nm[sel] ** 2)))
+    return res
+
+
+def recording_span(rec: Recording) -> SpanData:
+    """The whole recording as :class:`SpanData` (times relative to ``rec.start_ns``)."""
+    if len(rec.force) < 2:
+        raise ValueError(f"{rec.source or 'recording'}: needs force-plate samples on {FORCE_TOPIC}, found {len(rec.force)}")
+    t0 = rec.start_ns
+    data = SpanData((rec.force.stamp_ns - t0) * 1e-9, sagittal_wrench(rec.force))
+    if rec.markers is not None and len(rec.markers):
+        data.marker_t_s = (rec.markers.stamp_ns - t0) * 1e-9
+        data.markers_xz = sagittal_markers(rec.markers)
+    return data
+
+
+def analyze_recording(rec: Recording, options: AnalysisOptions | None = None) -> RecordingAnalysis:
+    """Stances and per-stance inverse dynamics of a whole recording.
+
+    Parameters
+    ----------
+    rec : Recording
+        Needs a subject (mass, height) and force-plate data; without markers
+        only force-based figures are computed and the stances are rejected
+        for the joint analysis with reason "no marker data".
+    options : AnalysisOptions, optional
+
+    Returns
+    -------
+    RecordingAnalysis
+    """
+    options = options or AnalysisOptions()
+    if rec.subject is None:
+        raise ValueError(f"{rec.source or 'recording'}: no {SUBJECT_TOPIC} message; give the subject's mass and height")
+    data = recording_span(rec)
+    stances = detect_stances(data.force_t_s, data.wrench[:, 1], options.detector)
+    model = options.body_model
+    if model is None and data.markers_xz is not None:
+        model = body_model_from_markers(rec.subject, rec.markers, options.overrides)
+    results = analyze_span(data, stances, list(range(len(stances))), model, rec.subject.body_mass_kg, options)
+    return RecordingAnalysis(rec.subject, model, rec.start_ns, recording_info(rec), results, list(rec.warnings))
+
+
+def recording_info(rec: Recording) -> dict:
+    """Topics, sampling rates and time span of a recording (for the JSON)."""
+    t0 = rec.start_ns
+    ends = [int(rec.force.stamp_ns[-1])]
+    topics = {FORCE_TOPIC: {"messages": len(rec.force), "rate_hz": sampling_rate_hz(rec.force.stamp_ns * 1e-9)}}
+    if rec.markers is not None and len(rec.markers) >= 2:
+        topics[MARKER_TOPIC] = {"messages": len(rec.markers), "rate_hz": sampling_rate_hz(rec.markers.stamp_ns * 1e-9)}
+        ends.append(int(rec.markers.stamp_ns[-1]))
+    if rec.subject is not None:
+        topics[SUBJECT_TOPIC] = {"messages": 1}
+    end = max(ends)
+    return {"source": rec.source, "topics": topics, "start_ns": int(t0), "end_ns": end, "duration_s": (end - t0) * 1e-9}
+
+
+def _num(x) -> float | None:
+    return None if x is None or not np.isfinite(x) else float(x)
+
+
+def stance_to_json(s: StanceResult, start_ns: int) -> dict:
+    """One stance as a JSON-ready dict (schema in docs/analyze_json.md)."""
+    out = {
+        "index": s.index,
+        "touchdown_s": s.touchdown_s,
+        "takeoff_s": s.takeoff_s,
+        "touchdown_stamp_ns": int(start_ns + round(s.touchdown_s * 1e9)),
+        "complete": s.complete,
+        "rejection_reason": s.rejection_reason,
+        "contact_time_s": s.contact_time_s,
+        "flight_before_s": _num(s.flight_before_s),
+        "flight_after_s": _num(s.flight_after_s),
+        "peak_grf_N": _num(s.peak_grf_n),
+        "peak_grf_bw": _num(s.peak_grf_bw),
+        "hop_frequency_hz": _num(s.hop_frequency_hz),
+        "leg_stiffness_n_per_m": _num(s.leg_stiffness_n_per_m),
+        "leg_stiffness_kinematic_n_per_m": _num(s.leg_stiffness_kinematic_n_per_m),
+        "com_drop_grf_m": _num(s.com_drop_grf_m),
+        "com_drop_kinematic_m": _num(s.com_drop_kinematic_m),
+        "hip_excursion_m": _num(s.hip_excursion_m),
+        "hip_residual_rms_nm": _num(s.hip_residual_rms_nm),
+        "joints": None,
+    }
+    if s.joints is not None:
+        out["joints"] = {}
+        for j, name in enumerate(JOINT_NAMES):
+            arrays = {k: v.tolist() for k, v in s.joints.joint(name).items()}
+            arrays["brake_work_j"] = float(s.brake_work_j[j])
+            arrays["push_work_j"] = float(s.push_work_j[j])
+            arrays["overall_stiffness_nm_per_rad"] = _num(s.overall_stiffness_nm_per_rad[j])
+            out["joints"][name] = arrays
+    return out
+
+
+def analysis_to_json(analysis: RecordingAnalysis) -> dict:
+    """The ``hop-impedance analyze`` JSON document (schema in docs/analyze_json.md)."""
+    subj = analysis.subject
+    model = analysis.model
+    return {
+        "schema": "hop_impedance.analyze/1",
+        "subject": {
+            "subject_id": subj.subject_id,
+            "body_mass_kg": subj.body_mass_kg,
+            "body_height_m": subj.body_height_m,
+            "sex": subj.sex,
+            "segments": None
+            if model is None
+            else {
+                seg.name: {
+                    "mass_kg": seg.mass_kg,
+                    "length_m": seg.length_m,
+                    "com_along_m": seg.com_along_m,
+                    "com_perp_m": seg.com_perp_m,
+                    "inertia_kgm2": seg.inertia_kgm2,
+                }
+                for seg in model.segments
+            },
+        },
+        "recording": analysis.recording,
+        "warnings": analysis.warnings,
+        "stances": [stance_to_json(s, analysis.start_ns) for s in analysis.stances],
+    }

@@ -1,0 +1,228 @@
+"""Sagittal kinematics from the six contract markers.
+
+Processing order (chosen here; tests in ``test/biomech/test_kinematics.py``)
+---------------------------------------------------------------------------
+1. Markers are projected on the sagittal plane (lab x, z).
+2. Gaps are filled (:func:`hop_impedance.biomech.filtering.fill_gaps`).
+3. Low-pass at the marker rate (zero-lag Butterworth, default 12 Hz).
+4. Segment angles q1..q4 (``joint_angles.segment_angle``) and segment
+   centres of mass are computed at the marker rate from the filtered markers.
+5. Joint points, angles and centres of mass are interpolated with cubic
+   splines (``scipy.interpolate.CubicSpline``) and evaluated, with their first
+   and second derivatives, on the *force-plate* time base. Markers are
+   upsampled onto force time (not the reverse) because the force carries the
+   fast events (touchdown within a millisecond); the filtered marker signals
+   have no content above the cut-off, far below the marker Nyquist frequency,
+   so the spline and its derivatives are accurate there. Differentiating the
+   spline is exact for the interpolant, avoiding a second numerical
+   differentiation step.
+
+Both time bases must be on the same clock (seconds since the recording's
+first message, from the ``header.stamp`` of each stream).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from hop_impedance.biomech.body_model import BodyModel, body_model, foot_geometry_from_points, with_overrides
+from hop_impedance.biomech.filtering import DEFAULT_CUTOFF_HZ, DEFAULT_MAX_GAP_S, Gap, fill_gaps, lowpass, sampling_rate_hz
+from hop_impedance.biomech.joint_angles import joint_angles, segment_angle
+from hop_impedance.recording import MARKER_NAMES, MarkerSeries, Subject
+
+#: Joint points used by the dynamics, in order: contact point and the proximal end of each segment.
+POINT_NAMES: tuple[str, ...] = ("toe", "ankle", "knee", "hip", "head")
+_POINT_IDX = [MARKER_NAMES.index(n) for n in POINT_NAMES]
+
+
+@dataclass
+class Kinematics:
+    """Sagittal kinematics on one time base.
+
+    Attributes
+    ----------
+    t_s : ndarray, shape (N,)
+        Time (s).
+    points_xz : ndarray, shape (N, 5, 2)
+        toe, ankle, knee, hip, head ``[x, z]`` (m).
+    q, qd, qdd : ndarray, shape (N, 4)
+        Segment angles q1..q4 (rad), rates (rad/s), accelerations (rad/s^2);
+        counter-clockwise positive from the forward horizontal.
+    rho, rhod : ndarray, shape (N, 3)
+        Joint angles (rad) and rates (rad/s), ankle, knee, hip; increase with flexion.
+    com_xz, com_acc : ndarray, shape (N, 4, 2)
+        Segment centres of mass (m) and their accelerations (m/s^2), foot..HAT.
+    reliable : ndarray, shape (N,), bool
+        False where a marker lay in an unfilled gap or outside the marker
+        recording's span.
+    """
+
+    t_s: np.ndarray
+    points_xz: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    rho: np.ndarray
+    rhod: np.ndarray
+    com_xz: np.ndarray
+    com_acc: np.ndarray
+    reliable: np.ndarray
+
+    def body_com_xz(self, model: BodyModel) -> np.ndarray:
+        """Whole-body centre of mass (m), shape (N, 2): mass-weighted segment COMs."""
+        m = np.array([s.mass_kg for s in model.segments])
+        return np.einsum("s,nsk->nk", m, self.com_xz) / m.sum()
+
+
+def sagittal_markers(markers: MarkerSeries) -> np.ndarray:
+    """Contract markers as ``[x, z]``, shape (M, 6, 2) (m), in :data:`MARKER_NAMES` order.
+
+    Raises ValueError naming any contract marker the series lacks.
+    """
+    missing = [n for n in MARKER_NAMES if n not in markers.names]
+    if missing:
+        raise ValueError(f"marker series lacks contract marker(s) {missing}; has {list(markers.names)}")
+    idx = [markers.names.index(n) for n in MARKER_NAMES]
+    return markers.positions_m[:, idx, :][:, :, [0, 2]]
+
+
+def body_model_from_markers(subject: Subject, markers: MarkerSeries, overrides: dict | None = None) -> BodyModel:
+    """de Leva model with segment lengths and foot triangle measured from the markers.
+
+    Lengths are the medians, over frames where both end markers are visible,
+    of the sagittal distances ankle-knee, knee-hip and hip-head; the foot
+    triangle is the median toe, heel and ankle positions relative to the toe
+    in the foot frame.
+
+    Parameters
+    ----------
+    subject : Subject
+        Mass, stature and sex.
+    markers : MarkerSeries
+    overrides : dict, optional
+        Per-segment overrides (:func:`body_model.with_overrides`).
+    """
+    xz = sagittal_markers(markers)
+    toe, heel, ankle, knee, hip, head = (xz[:, i, :] for i in range(6))
+
+    def median_dist(a: np.ndarray, b: np.ndarray, name: str) -> float:
+        d = np.hypot(*(b - a).T)
+        d = d[np.isfinite(d)]
+        if d.size == 0:
+            raise ValueError(f"cannot measure the {name} length: its markers are never visible together")
+        return float(np.median(d))
+
+    lengths = {
+        "shank": median_dist(ankle, knee, "shank"),
+        "thigh": median_dist(knee, hip, "thigh"),
+        "hat": median_dist(hip, head, "hat"),
+    }
+    ok = np.all(np.isfinite(np.stack([toe, heel, ankle], axis=1)), axis=(1, 2))
+    if not ok.any():
+        raise ValueError("cannot measure the foot: toe, heel and ankle markers are never visible together")
+    e1 = ankle[ok] - toe[ok]
+    e1 /= np.hypot(*e1.T)[:, None]
+    e2 = np.column_stack([-e1[:, 1], e1[:, 0]])
+    rel_a = ankle[ok] - toe[ok]
+    rel_h = heel[ok] - toe[ok]
+    ankle_local = np.array([np.median(np.sum(rel_a * e1, 1)), 0.0])
+    heel_local = np.array([np.median(np.sum(rel_h * e1, 1)), np.median(np.sum(rel_h * e2, 1))])
+    geometry = foot_geometry_from_points(np.zeros(2), heel_local, ankle_local)
+    model = body_model(subject.body_mass_kg, lengths, geometry, subject.sex, subject.body_height_m)
+    return with_overrides(model, overrides) if overrides else model
+
+
+def segment_angles_from_points(points_xz: np.ndarray) -> np.ndarray:
+    """q1..q4 (rad), shape (N, 4), from points toe, ankle, knee, hip, head, shape (N, 5, 2)."""
+    return np.stack([segment_angle(points_xz[:, i], points_xz[:, i + 1]) for i in range(4)], axis=1)
+
+
+def segment_coms(points_xz: np.ndarray, q: np.ndarray, model: BodyModel) -> np.ndarray:
+    """Segment centres of mass (m), shape (N, 4, 2).
+
+    Each COM is placed from the segment's distal point along the segment
+    axis (angle q) by ``com_along_m`` and perpendicular (+90 deg) by ``com_perp_m``.
+    """
+    along = np.array([s.com_along_m for s in model.segments])
+    perp = np.array([s.com_perp_m for s in model.segments])
+    e1 = np.stack([np.cos(q), np.sin(q)], axis=-1)
+    e2 = np.stack([-np.sin(q), np.cos(q)], axis=-1)
+    return points_xz[:, :4, :] + along[None, :, None] * e1 + perp[None, :, None] * e2
+
+
+def compute_kinematics(
+    marker_t_s: np.ndarray,
+    markers_xz: np.ndarray,
+    t_out_s: np.ndarray,
+    model: BodyModel,
+    cutoff_hz: float = DEFAULT_CUTOFF_HZ,
+    max_gap_s: float = DEFAULT_MAX_GAP_S,
+) -> tuple[Kinematics, list[Gap]]:
+    """Filtered kinematics resampled onto ``t_out_s`` (see the module docstring).
+
+    Parameters
+    ----------
+    marker_t_s : ndarray, shape (M,)
+        Marker times (s), uniformly sampled.
+    markers_xz : ndarray, shape (M, 6, 2)
+        Sagittal markers in :data:`MARKER_NAMES` order (m); NaN = occluded.
+    t_out_s : ndarray, shape (N,)
+        Output times (s), e.g. the force-plate stamps on the same clock.
+    model : BodyModel
+    cutoff_hz, max_gap_s : float
+        Low-pass cut-off (Hz) and longest filled gap (s).
+
+    Returns
+    -------
+    Kinematics
+        On ``t_out_s``; NaN and ``reliable=False`` outside the marker span.
+    list of Gap
+        Gaps found (column = marker index in :data:`MARKER_NAMES`).
+    """
+    if len(marker_t_s) < 8:
+        raise ValueError(f"need at least 8 marker frames, got {len(marker_t_s)}")
+    filled, reliable_m, gaps = fill_gaps(marker_t_s, markers_xz, max_gap_s)
+    if not np.all(np.isfinite(filled)):
+        bad = [MARKER_NAMES[c] for c in range(filled.shape[1]) if not np.isfinite(filled[:, c]).all()]
+        raise ValueError(f"marker(s) {bad} never visible: cannot compute kinematics")
+    fs = sampling_rate_hz(marker_t_s)
+    smooth = lowpass(filled, fs, cutoff_hz)
+    points = smooth[:, _POINT_IDX, :]
+    q = segment_angles_from_points(points)
+    com = segment_coms(points, q, model)
+    t_out = np.asarray(t_out_s, float)
+    inside = (t_out >= marker_t_s[0]) & (t_out <= marker_t_s[-1])
+    sp_pts = CubicSpline(marker_t_s, points, axis=0)
+    sp_q = CubicSpline(marker_t_s, q, axis=0)
+    sp_com = CubicSpline(marker_t_s, com, axis=0)
+    tin = t_out[inside]
+
+    def on_out(values: np.ndarray) -> np.ndarray:
+        full = np.full((t_out.size,) + values.shape[1:], np.nan)
+        full[inside] = values
+        return full
+
+    qv, qd, qdd = (on_out(sp_q(tin, k)) for k in range(3))
+    alpha = model.foot_geometry.alpha_rad
+    rho = joint_angles(qv, alpha)
+    rhod = np.stack([qd[:, 0] - qd[:, 1], qd[:, 2] - qd[:, 1], qd[:, 2] - qd[:, 3]], axis=1)
+    # A frame is reliable if the nearest marker frames on both sides were.
+    ok_m = np.all(reliable_m, axis=1).astype(float)
+    reliable = np.zeros(t_out.size, bool)
+    reliable[inside] = np.interp(tin, marker_t_s, ok_m) >= 1.0
+    kin = Kinematics(
+        t_s=t_out,
+        points_xz=on_out(sp_pts(tin)),
+        q=qv,
+        qd=qd,
+        qdd=qdd,
+        rho=rho,
+        rhod=rhod,
+        com_xz=on_out(sp_com(tin)),
+        com_acc=on_out(sp_com(tin, 2)),
+        reliable=reliable,
+    )
+    return kin, gaps
