@@ -22,7 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from hop_impedance.importers.session import LabSession, PlateData
+from hop_impedance.importers.marker_mapping import MarkerMapping, choose_mapping
+from hop_impedance.importers.session import LabSession, PlateData, session_to_recording
+from hop_impedance.recording import Recording
 
 #: Unit strings found in C3D files (normalised: lower case, no spaces, dots or '*'), to SI.
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "cm": 1e-2}
@@ -192,3 +194,25 @@ def c3d_session(path: str | Path) -> LabSession:
         source=str(path),
         warnings=warnings,
     )
+
+
+def import_c3d(path: str | Path, markers: str | Path | MarkerMapping | None = None, **options) -> Recording:
+    """Contract recording from a C3D file.
+
+    Parameters
+    ----------
+    path : str or Path
+    markers : mapping name, YAML path, MarkerMapping or None
+        None picks the first shipped mapping whose markers are all present.
+    **options
+        Passed to :func:`~hop_impedance.importers.session.session_to_recording`
+        (``up``, ``forward``, ``mass_kg``, ``height_m``, ``plates``, ``sex``).
+
+    Returns
+    -------
+    Recording
+        Contract frame and units; ``warnings`` lists detections and estimates.
+    """
+    session = c3d_session(path)
+    mapping = choose_mapping(session.marker_labels, markers) if session.marker_positions_m is not None else None
+    return session_to_recording(session, mapping, **options)

@@ -187,3 +187,44 @@ def forward_pair_positions(
         rear.append(positions[:, idx["heel"], :])
         front.append(positions[:, idx["toe"], :])
     return rear, front
+
+
+def choose_mapping(labels: list[str] | tuple[str, ...], spec: str | Path | MarkerMapping | None = None) -> MarkerMapping:
+    """The mapping to use for a file's labels.
+
+    Parameters
+    ----------
+    labels : sequence of str
+        The file's marker labels.
+    spec : str, Path, MarkerMapping or None
+        A mapping, a shipped name or a YAML path. None tries the shipped
+        mappings in :func:`available_mappings` order and takes the first whose
+        six markers are all present (``*_right`` before ``*_left``).
+
+    Raises
+    ------
+    MissingMarkersError
+        If ``spec`` is given and lacks markers, or no shipped mapping fits
+        (the message lists what each one misses).
+    """
+    if isinstance(spec, MarkerMapping):
+        resolve_labels(labels, spec)
+        return spec
+    if spec is not None:
+        mapping = load_marker_mapping(spec)
+        resolve_labels(labels, mapping)
+        return mapping
+    names = sorted(available_mappings(), key=lambda n: (n.endswith("_left"), n))
+    reasons = []
+    for name in names:
+        mapping = load_marker_mapping(name)
+        try:
+            resolve_labels(labels, mapping)
+        except MissingMarkersError as exc:
+            reasons.append(str(exc))
+            continue
+        return mapping
+    raise MissingMarkersError(
+        "no shipped marker mapping fits this file's labels; write a YAML mapping (see docs/importing.md). "
+        + " | ".join(reasons)
+    )

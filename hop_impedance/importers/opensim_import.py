@@ -24,7 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from hop_impedance.importers.session import LabSession, PlateData, sampling_rate_hz
+from hop_impedance.importers.marker_mapping import MarkerMapping, choose_mapping
+from hop_impedance.importers.session import LabSession, PlateData, sampling_rate_hz, session_to_recording
+from hop_impedance.recording import Recording
 
 #: Length units accepted in TRC headers, in metres.
 LENGTH_UNITS_M = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "meters": 1.0, "millimeters": 1e-3}
@@ -237,3 +239,27 @@ def opensim_session(trc_path: str | Path | None, mot_path: str | Path) -> LabSes
         source=", ".join(str(p) for p in (trc_path, mot_path) if p is not None),
         warnings=warnings,
     )
+
+
+def import_opensim(
+    trc_path: str | Path | None, mot_path: str | Path, markers: str | Path | MarkerMapping | None = None, **options
+) -> Recording:
+    """Contract recording from an OpenSim TRC + GRF MOT pair (TRC optional).
+
+    Parameters
+    ----------
+    trc_path : str, Path or None
+    mot_path : str or Path
+    markers : mapping name, YAML path, MarkerMapping or None
+        None picks the first shipped mapping whose markers are all present.
+    **options
+        Passed to :func:`~hop_impedance.importers.session.session_to_recording`
+        (``up`` defaults to OpenSim's +Y, ``forward``, ``mass_kg``, ``height_m``, ``plates``, ``sex``).
+
+    Returns
+    -------
+    Recording
+    """
+    session = opensim_session(trc_path, mot_path)
+    mapping = choose_mapping(session.marker_labels, markers) if session.marker_positions_m is not None else None
+    return session_to_recording(session, mapping, **options)
