@@ -331,9 +331,9 @@ def recording_info(rec: Recording) -> dict:
     """Topics, sampling rates and time span of a recording (for the JSON)."""
     t0 = rec.start_ns
     ends = [int(rec.force.stamp_ns[-1])]
-    topics = {FORCE_TOPIC: {"messages": len(rec.force), "rate_hz": sampling_rate_hz(rec.force.stamp_ns * 1e-9)}}
+    topics = {FORCE_TOPIC: {"messages": len(rec.force), "rate_hz": sampling_rate_hz((rec.force.stamp_ns - t0) * 1e-9)}}
     if rec.markers is not None and len(rec.markers) >= 2:
-        topics[MARKER_TOPIC] = {"messages": len(rec.markers), "rate_hz": sampling_rate_hz(rec.markers.stamp_ns * 1e-9)}
+        topics[MARKER_TOPIC] = {"messages": len(rec.markers), "rate_hz": sampling_rate_hz((rec.markers.stamp_ns - t0) * 1e-9)}
         ends.append(int(rec.markers.stamp_ns[-1]))
     if rec.subject is not None:
         topics[SUBJECT_TOPIC] = {"messages": 1}

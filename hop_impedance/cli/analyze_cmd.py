@@ -1,0 +1,78 @@
+"""``hop-impedance analyze REC.mcap --json OUT.json``: stances and per-stance inverse dynamics.
+
+The JSON schema is documented in docs/analyze_json.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+
+def register(subparsers) -> None:
+    """Add the ``analyze`` parser."""
+    p = subparsers.add_parser(
+        "analyze",
+        help="stances, joint kinematics and inverse dynamics of a recording",
+        description="Detect stances, run 2D inverse dynamics and write per-stance results as JSON.",
+    )
+    p.add_argument("recording", help="contract recording (MCAP)")
+    p.add_argument("--json", required=True, metavar="OUT", help="output JSON file ('-' for stdout)")
+    p.add_argument("--mass-kg", type=float, help="body mass (kg), overrides/replaces the /subject message")
+    p.add_argument("--height-m", type=float, help="body height (m), overrides/replaces the /subject message")
+    p.add_argument("--sex", choices=("female", "male"), help="de Leva table (default: the recording's, else female)")
+    p.add_argument("--segments", metavar="YAML", help="per-segment overrides of the body model")
+    p.add_argument("--cutoff-hz", type=float, default=12.0, help="low-pass cut-off for markers and forces (Hz, default 12)")
+    p.add_argument("--max-gap-s", type=float, default=0.05, help="longest marker gap filled (s, default 0.05)")
+    p.add_argument("--indent", type=int, default=None, help="pretty-print the JSON with this indent")
+    p.set_defaults(func=run)
+
+
+def _subject(rec, args):
+    from dataclasses import replace
+
+    from hop_impedance.recording import Subject
+
+    subj = rec.subject
+    if subj is None:
+        if args.mass_kg is None or args.height_m is None:
+            raise ValueError(f"{args.recording}: no /subject message; give --mass-kg and --height-m")
+        subj = Subject("unknown", args.mass_kg, args.height_m)
+    changes = {}
+    if args.mass_kg is not None:
+        changes["body_mass_kg"] = args.mass_kg
+    if args.height_m is not None:
+        changes["body_height_m"] = args.height_m
+    if args.sex is not None:
+        changes["sex"] = args.sex
+    return replace(subj, **changes) if changes else subj
+
+
+def run(args: argparse.Namespace) -> int:
+    """Load, analyse, write the JSON; print a one-line summary on stderr."""
+    import json
+    import sys
+    from dataclasses import replace
+
+    from hop_impedance.biomech.analysis import AnalysisOptions, analysis_to_json, analyze_recording
+    from hop_impedance.biomech.body_model import load_overrides
+    from hop_impedance.io.recording_io import load_recording
+
+    rec = load_recording(args.recording)
+    rec = replace(rec, subject=_subject(rec, args))
+    options = AnalysisOptions(
+        marker_cutoff_hz=args.cutoff_hz,
+        force_cutoff_hz=args.cutoff_hz,
+        max_gap_s=args.max_gap_s,
+        overrides=load_overrides(args.segments) if args.segments else None,
+    )
+    doc = analysis_to_json(analyze_recording(rec, options))
+    text = json.dumps(doc, indent=args.indent, allow_nan=False)
+    if args.json == "-":
+        sys.stdout.write(text + "\n")
+    else:
+        with open(args.json, "w", encoding="utf-8") as fh:
+            fh.write(text + "\n")
+    n = len(doc["stances"])
+    ok = sum(1 for s in doc["stances"] if s["joints"] is not None)
+    print(f"hop-impedance analyze: {n} stances, {ok} with inverse dynamics -> {args.json}", file=sys.stderr)
+    return 0
