@@ -1,0 +1,95 @@
+"""The seed paper's constraints (Eqs. 7-9) as linear inequality rows.
+
+At every sample l of the stance (all are linear in the coefficients, see
+:mod:`hop_impedance.impedance.regression_model`):
+
+- Eq. 7: K_l >= 0 and B_l >= 0;
+- Eq. 8: E_s,l = int_t0^tl M_s d(rho) >= 0, with E_s0 = 0 at touchdown (choice:
+  the spring cannot give back more energy than it received during this stance);
+- Eq. 9: P_d,l = -M_d,l * omega_l <= 0, written as M_d,l * omega_l >= 0.
+
+Each constraint is returned as a row ``a`` with ``a @ theta >= 0``. Rows that are
+identically zero for the active terms (e.g. B >= 0 when no damping term is in
+the model, or E_s at touchdown) are dropped; duplicate rows are kept (harmless).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hop_impedance.impedance.regression_model import StanceRegressors
+
+#: Names of the constraint families, in the order they are stacked.
+CONSTRAINT_FAMILIES: tuple[str, ...] = (
+    "stiffness_nonnegative",
+    "damping_nonnegative",
+    "spring_energy_nonnegative",
+    "damper_power_nonpositive",
+)
+
+
+def constraint_rows(regressors: StanceRegressors, columns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked Eqs. 7-9 rows for the parameters ``columns`` (``A @ theta >= 0``).
+
+    Parameters
+    ----------
+    regressors : StanceRegressors
+        Rows of one stance.
+    columns : ndarray of int, shape (p,)
+        Indices into :data:`~hop_impedance.impedance.regression_model.PARAMETER_NAMES`
+        of the parameters in the model (intercept first).
+
+    Returns
+    -------
+    rows : ndarray, shape (m, p)
+        One row per non-trivial constraint (units: N m/rad, N m s/rad, J, W).
+    family : ndarray of int, shape (m,)
+        Index into :data:`CONSTRAINT_FAMILIES` of each row.
+    """
+    blocks = (
+        regressors.stiffness_rows,
+        regressors.damping_rows,
+        regressors.spring_energy_rows,
+        regressors.damper_power_rows,
+    )
+    rows, family = [], []
+    for index, block in enumerate(blocks):
+        sub = block[:, columns]
+        keep = np.any(sub != 0.0, axis=1)
+        rows.append(sub[keep])
+        family.append(np.full(int(keep.sum()), index, dtype=int))
+    return np.vstack(rows), np.concatenate(family)
+
+
+def constraint_violations(
+    regressors: StanceRegressors, theta: np.ndarray, tolerance: float = 0.0
+) -> dict[str, float]:
+    """Worst violation of each constraint family for a full parameter vector.
+
+    Parameters
+    ----------
+    regressors : StanceRegressors
+    theta : ndarray, shape (9,)
+        Full parameter vector in ``PARAMETER_NAMES`` order (zeros for dropped terms).
+    tolerance : float
+        Values above ``-tolerance`` count as satisfied.
+
+    Returns
+    -------
+    dict
+        Family name -> largest violation (>= 0; 0 when satisfied), in the
+        family's unit (N m/rad, N m s/rad, J, W).
+    """
+    theta = np.asarray(theta, float)
+    blocks = (
+        regressors.stiffness_rows,
+        regressors.damping_rows,
+        regressors.spring_energy_rows,
+        regressors.damper_power_rows,
+    )
+    out = {}
+    for name, block in zip(CONSTRAINT_FAMILIES, blocks):
+        values = block @ theta
+        worst = float(max(0.0, -(values.min() + tolerance))) if values.size else 0.0
+        out[name] = worst
+    return out
