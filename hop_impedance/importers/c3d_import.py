@@ -159,10 +159,10 @@ def c3d_session(path: str | Path) -> LabSession:
     warnings: list[str] = []
     try:
         c3d = ezc3d.c3d(str(path), extract_forceplat_data=True)
-    except (RuntimeError, ValueError, IndexError) as exc:
+    except (RuntimeError, ValueError, IndexError, OSError) as exc:
         try:
             ezc3d.c3d(str(path))
-        except (RuntimeError, ValueError, IndexError) as exc2:
+        except (RuntimeError, ValueError, IndexError, OSError) as exc2:
             raise ValueError(f"{path}: ezc3d cannot read it: {exc2}") from None
         raise ValueError(f"{path}: force-plate parameters (FORCE_PLATFORM group) are unusable: {exc}") from None
     params = c3d["parameters"]

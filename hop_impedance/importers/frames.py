@@ -90,9 +90,11 @@ def rotation_to_contract(up_lab: np.ndarray, forward_lab: np.ndarray) -> np.ndar
 def detect_forward(rear_m: list[np.ndarray], front_m: list[np.ndarray], up_lab: np.ndarray) -> np.ndarray:
     """Horizontal direction the subject faces, from rear->front marker pairs.
 
-    Each pair is e.g. heel->toe or PSIS->ASIS; the horizontal parts of all
-    finite pair vectors over all frames are averaged as unit vectors, which
-    cancels the toe-out of left and right feet when both are given.
+    Each pair is e.g. heel->toe or PSIS->ASIS. The horizontal unit vectors
+    of each pair are averaged over its finite frames, then the pairs are
+    averaged with equal weight (so an occluded frame does not tilt the
+    balance), which cancels the toe-out of left and right feet when both are
+    given.
 
     Parameters
     ----------
@@ -114,17 +116,17 @@ def detect_forward(rear_m: list[np.ndarray], front_m: list[np.ndarray], up_lab: 
         much that their mean direction is undefined.
     """
     z = np.asarray(up_lab, float) / np.linalg.norm(up_lab)
-    units = []
+    pair_means = []
     for rear, front in zip(rear_m, front_m):
         d = np.asarray(front, float) - np.asarray(rear, float)
         d = d - np.outer(d @ z, z)
         n = np.linalg.norm(d, axis=1)
         ok = np.isfinite(n) & (n > 0)
-        units.append(d[ok] / n[ok, None])
-    stacked = np.concatenate(units) if units else np.empty((0, 3))
-    if stacked.shape[0] == 0:
+        if ok.any():
+            pair_means.append((d[ok] / n[ok, None]).mean(axis=0))
+    if not pair_means:
         raise ValueError("cannot detect the forward direction: no frame has both markers of a rear->front pair")
-    mean = stacked.mean(axis=0)
+    mean = np.mean(pair_means, axis=0)
     if np.linalg.norm(mean) < 0.5:
         raise ValueError(
             "cannot detect the forward direction: rear->front marker pairs point in inconsistent "
