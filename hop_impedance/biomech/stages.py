@@ -19,7 +19,10 @@ Agreement with the batch analysis
   factor ~0.27 per marker sample) and is far below 1e-6 of the peak moment;
   the tests assert 1e-4 of the peak moment per joint.
 - A stance is emitted once the window's data have arrived (and the next
-  touchdown is known); so the latency is one flight plus ``pad_s``.
+  touchdown is known); so the latency is one flight plus ``pad_s``. The last
+  stance is emitted by :meth:`StanceAnalysisStage.flush`, with a window
+  reaching the end of the data (so its trailing flight's offset is the
+  batch one).
 """
 
 from __future__ import annotations
@@ -142,6 +145,8 @@ class StanceAnalysisStage:
             start, end = self._window(stances, k)
             if not final and not self._data_reach(end):
                 break
+            if final and k + 1 >= len(stances):
+                end = np.inf  # the last flight runs to the end of the data, as in batch
             data = self._span(start, end)
             out.extend(analyze_span(data, stances, [k], self.model, self.body_mass_kg, self.options))
             self._next += 1

@@ -140,6 +140,7 @@ def hopping_recording(
     drift_n_per_s: float = 2.0,
     noise_n: float = 2.0,
     seed: int = 0,
+    cut_end: bool = False,
     start_ns: int = 1_700_000_000_000_000_000,
 ) -> tuple[Recording, list[tuple[float, float]]]:
     """Periodic hops; returns the recording and the true (touchdown, take-off) times (s since start).
@@ -147,7 +148,7 @@ def hopping_recording(
     Vertical force in stance: a half sine whose impulse gives a symmetric
     ballistic flight (peak = pi/2 * m g * period / contact). Joint angles are
     :func:`angles` with the toe pinned during stance and lifted by a smooth
-    bump in flight.
+    bump in flight. ``cut_end`` lets a last stance run past the end.
     """
     rng = np.random.default_rng(seed)
     model = make_model(mass_kg)
@@ -155,7 +156,7 @@ def hopping_recording(
     t = np.arange(0.0, duration_s, 1.0 / force_hz)
     events = []
     td = first_touchdown_s
-    while td + contact_s < duration_s:
+    while td + contact_s < duration_s or (cut_end and td < duration_s):
         events.append((td, td + contact_s))
         td += period
     peak = np.pi / 2 * mass_kg * GRAVITY_M_S2 * period / contact_s
@@ -177,9 +178,9 @@ def hopping_recording(
     flight = phase > contact_s
     lift = np.where(flight, 0.08 * np.sin(np.pi * (phase - contact_s) / (period - contact_s)) ** 2, 0.0)
     pts[..., 1] += lift[:, None]
-    markers = MarkerSeries((start_ns + tm * 1e9).astype(np.int64), MARKER_NAMES, markers_from_points(pts, model))
+    markers = MarkerSeries(start_ns + np.round(tm * 1e9).astype(np.int64), MARKER_NAMES, markers_from_points(pts, model))
     rec = Recording(
-        ForcePlateSeries((start_ns + t * 1e9).astype(np.int64), force, torque),
+        ForcePlateSeries(start_ns + np.round(t * 1e9).astype(np.int64), force, torque),
         markers,
         Subject("synthetic", mass_kg, 1.65),
         source="synthetic hopping",
