@@ -48,7 +48,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--up", default=None, help="lab axis pointing up, e.g. +Z or +Y (default: from the file / detected)")
     p.add_argument(
-        "--forward", default=None, help="lab axis the subject faces, e.g. +X (default: detected from the markers)"
+        "--forward", default=None, help="lab axis the subject faces, e.g. +X or --forward=-Y (default: detected from the markers)"
     )
     p.add_argument("--mass-kg", type=_mass, default=None, help="body mass (kg), or 'auto' (quiet standing on the plates)")
     p.add_argument("--height-m", type=float, default=None, help="body height (m) (default: file, else leg markers)")
