@@ -20,9 +20,18 @@ from pathlib import Path
 import numpy as np
 
 
+def _opensim():
+    """Import opensim without its default ``opensim.log`` file in the working directory."""
+    import opensim as osim
+
+    osim.Logger.removeFileSink()
+    osim.Logger.setLevelString("error")
+    return osim
+
+
 def build_model(model):
     """An ``opensim.Model`` equivalent to our :class:`BodyModel`."""
-    import opensim as osim
+    osim = _opensim()
 
     m = osim.Model()
     m.setName("hop4")
@@ -71,9 +80,7 @@ def run_inverse_dynamics(model, t, q, hip_xz, wrench, workdir: Path) -> dict[str
     dict with ``time`` and ``ankle``, ``knee``, ``hip`` torques (N m) as OpenSim
     reports them (positive increasing its coordinate).
     """
-    import opensim as osim
-
-    osim.Logger.setLevelString("error")
+    osim = _opensim()
     workdir = Path(workdir)
     osim_model = build_model(model)
     coords = np.column_stack([t, q[:, 3], hip_xz[:, 0], hip_xz[:, 1], q[:, 2] - q[:, 3], q[:, 1] - q[:, 2], q[:, 0] - q[:, 1]])
