@@ -1,0 +1,280 @@
+"""Equations of motion of the four-segment sagittal chain (feet, shanks, thighs, HAT).
+
+Generalized coordinates
+-----------------------
+``g = [x_toe, z_toe, q1, q2, q3, q4]`` (m, m, rad x 4): the toe (contact point)
+in the lab's x-z plane and the absolute segment angles of
+:mod:`hop_impedance.biomech.joint_angles` (q_i = atan2(dz, dx) of the segment's
+distal->proximal vector, counter-clockwise positive in the x-z picture seen
+from the subject's right).
+
+Formulation
+-----------
+Segment i has its centre of mass at
+``p_i = toe + sum_{j<i} L_j e(q_j) + a_i e(q_i) + b_i n(q_i)`` with
+``e(q) = (cos q, sin q)``, ``n(q) = (-sin q, cos q)`` and (a_i, b_i) the
+body model's ``(com_along_m, com_perp_m)``. With the COM Jacobians
+``J_i = dp_i/dg`` (2 x 6) and the rotation Jacobian (q_i is the segment's
+absolute angle), the principle of virtual work gives
+
+    M(g) g'' + h(g, g') = Q_gravity + Q_joints + Q_ground,
+    M = sum_i m_i J_i^T J_i + I_i u_i u_i^T,     h = sum_i m_i J_i^T (dJ_i/dt g'),
+
+where ``dJ_i/dt g' = -sum_{j<i} L_j q_j'^2 e(q_j) - q_i'^2 (a_i e + b_i n)(q_i)``.
+Joint moments M_j are extensor positive and do virtual work ``-M_j d(rho_j)``
+(ankle rho1 = q1 - q2 + alpha, knee rho2 = q3 - q2 + pi, hip rho3 = q3 - q4 + pi),
+so ``Q_joints = -D^T M`` with ``D = d(rho)/dq`` (constant, 3 x 4). The ground
+force ``F = (Fx, Fz)`` on the subject acts at the toe: ``Q_ground = [Fx, Fz, 0, 0, 0, 0]``.
+
+Coordinates held fixed (e.g. ``x_toe`` under the no-slip constraint) are removed
+by taking the sub-system of the free coordinates; the generalized force that
+the equations of the fixed coordinates then require *is* the constraint force
+(:func:`constraint_forces`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hop_impedance.biomech.body_model import BodyModel
+from hop_impedance.recording import GRAVITY_M_S2
+
+#: d(rho)/dq of Eq. 2 (rows ankle, knee, hip; columns q1..q4). Constant.
+JOINT_JACOBIAN = np.array(
+    [
+        [1.0, -1.0, 0.0, 0.0],
+        [0.0, -1.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0, -1.0],
+    ]
+)
+
+N_COORDS = 6
+
+
+@dataclass(frozen=True)
+class Chain:
+    """Arrays of the four segments, foot first, for vectorised dynamics.
+
+    Attributes
+    ----------
+    mass_kg, length_m, com_along_m, com_perp_m, inertia_kgm2 : ndarray, shape (4,)
+        Per segment (foot, shank, thigh, HAT); lengths toe->ankle, ankle->knee,
+        knee->hip, hip->head marker.
+    alpha_rad : float
+        Foot angle alpha of Eq. 2 (rad).
+    heel_along_m, heel_perp_m : float
+        Heel marker in the foot frame (m).
+    gravity_m_s2 : float
+    """
+
+    mass_kg: np.ndarray
+    length_m: np.ndarray
+    com_along_m: np.ndarray
+    com_perp_m: np.ndarray
+    inertia_kgm2: np.ndarray
+    alpha_rad: float
+    heel_along_m: float
+    heel_perp_m: float
+    gravity_m_s2: float = GRAVITY_M_S2
+
+    @property
+    def total_mass_kg(self) -> float:
+        """Sum of segment masses (kg)."""
+        return float(self.mass_kg.sum())
+
+
+def chain_from_body_model(model: BodyModel) -> Chain:
+    """Collect the body model's segment parameters into a :class:`Chain`."""
+    segs = model.segments
+    return Chain(
+        mass_kg=np.array([s.mass_kg for s in segs]),
+        length_m=np.array([s.length_m for s in segs]),
+        com_along_m=np.array([s.com_along_m for s in segs]),
+        com_perp_m=np.array([s.com_perp_m for s in segs]),
+        inertia_kgm2=np.array([s.inertia_kgm2 for s in segs]),
+        alpha_rad=model.foot_geometry.alpha_rad,
+        heel_along_m=model.foot_geometry.heel_along_m,
+        heel_perp_m=model.foot_geometry.heel_perp_m,
+    )
+
+
+def _unit(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """e(q) and n(q) = de/dq, each shape q.shape + (2,)."""
+    c, s = np.cos(q), np.sin(q)
+    e = np.empty(np.shape(q) + (2,))
+    n = np.empty_like(e)
+    e[..., 0], e[..., 1] = c, s
+    n[..., 0], n[..., 1] = -s, c
+    return e, n
+
+
+def joint_positions(chain: Chain, g: np.ndarray) -> np.ndarray:
+    """Toe, ankle, knee, hip and head points in the x-z plane (m).
+
+    Parameters
+    ----------
+    g : ndarray, shape (..., 6)
+        Generalized coordinates.
+
+    Returns
+    -------
+    ndarray, shape (..., 5, 2)
+        ``[toe, ankle, knee, hip, head]``, each ``[x, z]``.
+    """
+    g = np.asarray(g, float)
+    e, _ = _unit(g[..., 2:])
+    steps = chain.length_m[:, None] * e  # (..., 4, 2)
+    toe = g[..., None, 0:2]
+    return np.concatenate([toe, toe + np.cumsum(steps, axis=-2)], axis=-2)
+
+
+def heel_position(chain: Chain, g: np.ndarray) -> np.ndarray:
+    """Heel marker ``[x, z]`` (m), shape (..., 2), from the foot frame."""
+    g = np.asarray(g, float)
+    e, n = _unit(g[..., 2])
+    return g[..., 0:2] + chain.heel_along_m * e + chain.heel_perp_m * n
+
+
+def segment_com_positions(chain: Chain, g: np.ndarray) -> np.ndarray:
+    """Segment centres of mass ``[x, z]`` (m), shape (..., 4, 2)."""
+    g = np.asarray(g, float)
+    e, n = _unit(g[..., 2:])
+    joints = joint_positions(chain, g)[..., :4, :]
+    return joints + chain.com_along_m[:, None] * e + chain.com_perp_m[:, None] * n
+
+
+def body_com(chain: Chain, g: np.ndarray) -> np.ndarray:
+    """Whole-body centre of mass ``[x, z]`` (m), shape (..., 2)."""
+    p = segment_com_positions(chain, g)
+    return np.einsum("i,...ik->...k", chain.mass_kg, p) / chain.total_mass_kg
+
+
+_BEFORE = np.tril(np.ones((4, 4)), -1)  # [i, j] = 1 where segment j lies below segment i
+_OWN = np.eye(4)
+
+
+def com_jacobians(chain: Chain, q: np.ndarray) -> np.ndarray:
+    """Jacobians of the segment COMs with respect to g, shape (4, 2, 6).
+
+    Parameters
+    ----------
+    q : ndarray, shape (4,)
+        Segment angles (rad).
+    """
+    e, n = _unit(np.asarray(q, float))
+    own = chain.com_along_m[:, None] * n - chain.com_perp_m[:, None] * e  # (4, 2)
+    link = chain.length_m[:, None] * n
+    jac = np.empty((4, 2, N_COORDS))
+    jac[:, :, 0:2] = np.eye(2)
+    jac[:, :, 2:] = _BEFORE[:, None, :] * link.T[None] + _OWN[:, None, :] * own.T[None]
+    return jac
+
+
+def _velocity_products(chain: Chain, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """dJ_i/dt g' for each segment COM, shape (4, 2) (m/s^2)."""
+    e, n = _unit(q)
+    link = -(chain.length_m * qd**2)[:, None] * e  # (4, 2)
+    own = -(qd**2)[:, None] * (chain.com_along_m[:, None] * e + chain.com_perp_m[:, None] * n)
+    before = np.cumsum(link, axis=0) - link  # sum over j < i
+    return before + own
+
+
+def equations_of_motion(chain: Chain, g: np.ndarray, gd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mass matrix, velocity-product and gravity terms at one state.
+
+    Parameters
+    ----------
+    g, gd : ndarray, shape (6,)
+        Generalized coordinates (m, rad) and velocities (m/s, rad/s).
+
+    Returns
+    -------
+    mass : ndarray, shape (6, 6)
+        M(g) (kg, kg m, kg m^2 blocks).
+    bias : ndarray, shape (6,)
+        h(g, g'), the velocity-product term on the left-hand side.
+    gravity : ndarray, shape (6,)
+        Q_gravity (N, N m) on the right-hand side.
+    """
+    q, qd = g[2:], gd[2:]
+    jac = com_jacobians(chain, q)
+    weighted = chain.mass_kg[:, None, None] * jac
+    flat_w, flat = weighted.reshape(8, N_COORDS), jac.reshape(8, N_COORDS)
+    mass = flat_w.T @ flat
+    mass[2:, 2:] += np.diag(chain.inertia_kgm2)
+    bias = flat_w.T @ _velocity_products(chain, q, qd).reshape(8)
+    gravity = -chain.gravity_m_s2 * weighted[:, 1, :].sum(axis=0)
+    return mass, bias, gravity
+
+
+def joint_generalized_forces(moments_nm: np.ndarray) -> np.ndarray:
+    """Q on g of extensor-positive joint moments (ankle, knee, hip), shape (6,).
+
+    A positive (extensor) moment acts to decrease rho: its virtual work is
+    ``-M . d(rho)``, hence ``Q_q = -D^T M``.
+    """
+    out = np.zeros(N_COORDS)
+    out[2:] = -JOINT_JACOBIAN.T @ np.asarray(moments_nm, float)
+    return out
+
+
+def accelerations(
+    chain: Chain,
+    g: np.ndarray,
+    gd: np.ndarray,
+    moments_nm: np.ndarray,
+    toe_force_n: np.ndarray,
+    free: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Generalized accelerations with some coordinates held fixed.
+
+    Parameters
+    ----------
+    g, gd : ndarray, shape (6,)
+        State; the fixed coordinates must have zero velocity.
+    moments_nm : ndarray, shape (3,)
+        Joint moments, extensor positive (N m).
+    toe_force_n : ndarray, shape (2,)
+        Known ground force at the toe ``[Fx, Fz]`` on the subject (N); for a
+        fixed coordinate put 0 there, its force is returned as a constraint force.
+    free : ndarray of bool, shape (6,)
+        Which coordinates move.
+
+    Returns
+    -------
+    gdd : ndarray, shape (6,)
+        Accelerations (zero for the fixed coordinates).
+    constraint : ndarray, shape (6,)
+        Generalized constraint forces (non-zero only on fixed coordinates);
+        on ``x_toe``/``z_toe`` these are the ground force components (N).
+    """
+    mass, bias, gravity = equations_of_motion(chain, g, gd)
+    rhs = gravity + joint_generalized_forces(moments_nm) - bias
+    rhs[0:2] += toe_force_n
+    gdd = np.zeros(N_COORDS)
+    gdd[free] = np.linalg.solve(mass[np.ix_(free, free)], rhs[free])
+    constraint = mass @ gdd - rhs
+    constraint[free] = 0.0
+    return gdd, constraint
+
+
+def mechanical_energy_j(chain: Chain, g: np.ndarray, gd: np.ndarray) -> tuple[float, float]:
+    """Kinetic and gravitational potential energy (J) at one state (z = 0 datum)."""
+    mass, _, _ = equations_of_motion(chain, g, gd)
+    kinetic = 0.5 * float(gd @ mass @ gd)
+    z = segment_com_positions(chain, g)[:, 1]
+    return kinetic, float(chain.gravity_m_s2 * chain.mass_kg @ z)
+
+
+def com_velocity(chain: Chain, g: np.ndarray, gd: np.ndarray) -> np.ndarray:
+    """Whole-body COM velocity ``[vx, vz]`` (m/s), shape (2,)."""
+    jac = com_jacobians(chain, g[2:])
+    return np.einsum("i,iak,k->a", chain.mass_kg, jac, gd) / chain.total_mass_kg
+
+
+def com_offset_jacobian(chain: Chain, q: np.ndarray) -> np.ndarray:
+    """d(COM - toe)/dq, shape (2, 4) (m/rad): how the angles move the COM relative to the toe."""
+    jac = com_jacobians(chain, q)
+    return np.einsum("i,iak->ak", chain.mass_kg, jac[:, :, 2:]) / chain.total_mass_kg

@@ -1,0 +1,461 @@
+"""Continuous hopping: stance by forward integration, flight prescribed and ballistic.
+
+Flight model (a documented simplification)
+------------------------------------------
+Integrating the free four-segment chain through flight is hard to steer to a
+chosen landing posture. Instead, during flight the whole-body centre of mass
+follows the exact ballistic path from its take-off position and velocity,
+and the segment angles follow a quintic (``scipy.interpolate.BPoly``) from
+their take-off angle, velocity and acceleration to the next touchdown posture
+with zero acceleration; the toe is placed so that the COM is where the
+ballistic path puts it. The force plate reads zero in flight. Whole-body
+angular momentum is not conserved in flight (the angles are prescribed); no
+quantity the analysis uses depends on it.
+
+Touchdown and hop sequencing
+----------------------------
+- Touchdown posture: joint angles ``rho_td`` (+ seeded N(0, posture_sd) per hop);
+  the foot angle q1 is chosen so that the COM is a set distance in front of
+  the toe: the calibrated offset that gives zero horizontal take-off velocity,
+  minus a Raibert-style foot-placement term ``vx (stance/2 + placement_gain_s)``
+  that keeps the hopper in place.
+- Segment angular velocities at touchdown: zero, plus the smallest correction
+  that makes the toe's horizontal velocity zero (so that the no-slip stance
+  starts without a horizontal impact).
+- The flight time follows from the take-off velocity (ballistic) and the next
+  touchdown posture. Before the first hop, :func:`calibrate` solves (with
+  ``scipy.optimize.root``) for the touchdown speed and push-off scale that make
+  the hop periodic (next touchdown speed = this one) with period ``1/freq``. Hop
+  by hop a proportional controller corrects the push-off scale from the
+  touchdown-speed error, with seeded variability of the target.
+- If the law has no push-off part, only the touchdown speed is calibrated;
+  hops then grow or decay according to the law's energy balance.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import BPoly
+from scipy.optimize import brentq, least_squares
+
+from hop_impedance.biomech.joint_angles import segment_angles_from_joint_angles
+from hop_impedance.simulation.dynamics import Chain, body_com, com_offset_jacobian, com_velocity
+from hop_impedance.simulation.ground import GroundLaw
+from hop_impedance.simulation.impedance_laws import CompositeLaw, ImpedanceLaw, PushOff
+from hop_impedance.simulation.stance import (
+    DEFAULT_ATOL,
+    DEFAULT_RTOL,
+    StanceSimulation,
+    TouchdownState,
+    simulate_stance,
+)
+
+
+@dataclass(frozen=True)
+class HoppingConfig:
+    """Everything that defines a hopping trial (all SI).
+
+    Attributes
+    ----------
+    freq_hz : float
+        Target hop frequency (Hz).
+    n_hops : int
+    surface : GroundLaw
+        Expected surface (the one the calibration uses).
+    law : ImpedanceLaw
+        Joint torque law; a :class:`PushOff` part (inside a CompositeLaw) is
+        scaled by the controller.
+    touchdown_rho_rad : tuple of 3 floats
+        Nominal joint angles at touchdown (rad).
+    com_ahead_m : float
+        COM horizontal position in front of the toe at touchdown (m).
+    unexpected_surface : GroundLaw or None
+        Surface used instead of ``surface`` on the hops in ``unexpected_hops``
+        (0-based), without changing the law (seed 001's unexpected surface).
+    posture_sd_rad, speed_sd, push_sd : float
+        Hop-to-hop variability: joint angles (rad), target touchdown speed
+        (fraction), push-off scale (fraction).
+    placement_gain_s : float
+        Horizontal balance: the COM is placed behind the toe by
+        ``vx (stance/2 + placement_gain_s)`` at touchdown (s).
+    lead_in_s : float
+        Flight before the first touchdown (s); the recording starts there.
+    rtol, atol : float
+        Stance integration tolerances.
+    """
+
+    freq_hz: float
+    n_hops: int
+    surface: GroundLaw
+    law: ImpedanceLaw
+    touchdown_rho_rad: tuple[float, float, float]
+    com_ahead_m: float = 0.0
+    unexpected_surface: GroundLaw | None = None
+    unexpected_hops: tuple[int, ...] = ()
+    posture_sd_rad: float = 0.01
+    speed_sd: float = 0.02
+    push_sd: float = 0.03
+    placement_gain_s: float = 0.05
+    lead_in_s: float = 0.15
+    rtol: float = DEFAULT_RTOL
+    atol: float = DEFAULT_ATOL
+
+    def __post_init__(self) -> None:
+        if not self.freq_hz > 0:
+            raise ValueError(f"freq_hz must be positive, got {self.freq_hz}")
+        if self.n_hops < 1:
+            raise ValueError(f"n_hops must be at least 1, got {self.n_hops}")
+
+    def surface_for_hop(self, hop: int) -> GroundLaw:
+        """Surface under hop ``hop`` (0-based)."""
+        if self.unexpected_surface is not None and hop in self.unexpected_hops:
+            return self.unexpected_surface
+        return self.surface
+
+
+def push_off_part(law: ImpedanceLaw) -> PushOff | None:
+    """The push-off part of a law, if any."""
+    if isinstance(law, PushOff):
+        return law
+    if isinstance(law, CompositeLaw):
+        return law.part(PushOff)  # type: ignore[return-value]
+    return None
+
+
+def scale_push_off(law: ImpedanceLaw, scale: float) -> ImpedanceLaw:
+    """Copy of ``law`` whose push-off amplitude is multiplied by ``scale`` (>= 0)."""
+    part = push_off_part(law)
+    if part is None:
+        return law
+    new = part.with_amplitude(max(scale, 0.0) * part.amplitude_nm)
+    return new if law is part else law.replace_part(part, new)  # type: ignore[union-attr]
+
+
+def touchdown_posture(chain: Chain, rho_rad: np.ndarray, com_ahead_m: float = 0.0) -> np.ndarray:
+    """Segment angles q1..q4 (rad) with joint angles ``rho_rad`` and the COM ``com_ahead_m`` before the toe."""
+    rho = np.asarray(rho_rad, float)[None]
+
+    def com_x(q1: float) -> float:
+        q = segment_angles_from_joint_angles(rho, np.array([q1]), chain.alpha_rad)[0]
+        return body_com(chain, np.r_[0.0, 0.0, q])[0] - com_ahead_m
+
+    grid = np.linspace(0.3, 3.0, 28)
+    vals = np.array([com_x(v) for v in grid])
+    sign_change = np.nonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[0]
+    if not len(sign_change):
+        raise ValueError(f"no foot angle puts the COM {com_ahead_m} m ahead of the toe for rho = {rho_rad}")
+    i = sign_change[0]
+    q1 = brentq(com_x, grid[i], grid[i + 1], xtol=1e-12)
+    return segment_angles_from_joint_angles(rho, np.array([q1]), chain.alpha_rad)[0]
+
+
+def touchdown_state(chain: Chain, q: np.ndarray, com_velocity_m_s: np.ndarray, x_toe_m: float) -> TouchdownState:
+    """Touchdown state with the toe at ``(x_toe, 0)`` and zero toe x velocity.
+
+    Segment angular velocities are the minimum-norm set that cancels the COM's
+    horizontal velocity relative to the toe; the COM velocity is kept.
+    """
+    jac = com_offset_jacobian(chain, q)
+    qd = jac[0] * (com_velocity_m_s[0] / float(jac[0] @ jac[0]))
+    toe_z_velocity = com_velocity_m_s[1] - float(jac[1] @ qd)
+    return TouchdownState(np.r_[x_toe_m, 0.0, q], np.r_[0.0, toe_z_velocity, qd])
+
+
+@dataclass(frozen=True)
+class Flight:
+    """A prescribed flight phase from take-off to the next touchdown (or the recording end)."""
+
+    t_start_s: float
+    duration_s: float
+    com0_m: np.ndarray
+    com_vel0_m_s: np.ndarray
+    angles: BPoly
+    gravity_m_s2: float
+
+    def evaluate(self, chain: Chain, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Generalized coordinates and velocities, each shape (N, 6), at absolute times ``t_s``."""
+        tau = np.clip(np.asarray(t_s, float) - self.t_start_s, 0.0, self.duration_s)
+        com = self.com0_m + np.outer(tau, self.com_vel0_m_s)
+        com[:, 1] -= 0.5 * self.gravity_m_s2 * tau**2
+        vel = np.tile(self.com_vel0_m_s, (len(tau), 1))
+        vel[:, 1] -= self.gravity_m_s2 * tau
+        q = self.angles(tau)
+        qd = self.angles.derivative()(tau)
+        g = np.zeros((len(tau), 6))
+        g[:, 2:] = q
+        offset = body_com(chain, g)
+        g[:, 0:2] = com - offset
+        gd = np.zeros_like(g)
+        gd[:, 2:] = qd
+        jac = np.array([com_offset_jacobian(chain, qi) for qi in q])
+        gd[:, 0:2] = vel - np.einsum("nak,nk->na", jac, qd)
+        return g, gd
+
+
+def flight_time_s(chain: Chain, com_z_m: float, com_vz_m_s: float, q_next: np.ndarray) -> float:
+    """Ballistic time until the COM is at the height that puts the toe on z = 0 in posture ``q_next`` (s).
+
+    Raises ValueError if the body cannot get there (take-off too weak).
+    """
+    height = com_z_m - body_com(chain, np.r_[0.0, 0.0, q_next])[1]
+    disc = com_vz_m_s**2 + 2.0 * chain.gravity_m_s2 * height
+    if disc < 0:
+        raise ValueError("take-off too weak: the COM never returns to touchdown height")
+    t = (com_vz_m_s + np.sqrt(disc)) / chain.gravity_m_s2
+    if not t > 0:
+        raise ValueError("take-off too weak: no flight phase")
+    return float(t)
+
+
+@dataclass
+class StanceRecord:
+    """One simulated stance inside a trial."""
+
+    index: int
+    t_touchdown_s: float
+    stance: StanceSimulation
+    surface: GroundLaw
+    law: ImpedanceLaw
+    touchdown: TouchdownState
+
+    @property
+    def t_takeoff_s(self) -> float:
+        """Take-off instant (s since recording start)."""
+        return self.t_touchdown_s + self.stance.duration_s
+
+
+@dataclass
+class HoppingTrial:
+    """A simulated trial: stances, flights and everything needed to sample sensors."""
+
+    config: HoppingConfig
+    chain: Chain
+    stances: list[StanceRecord]
+    flights: list[Flight]
+    t_end_s: float
+    calibration: dict
+    stop_reason: str = ""
+    notes: list[str] = field(default_factory=list)
+
+    def sample(self, t_s: np.ndarray) -> dict[str, np.ndarray]:
+        """True state at absolute times ``t_s`` (s), shape (N,).
+
+        Returns
+        -------
+        dict with ``g``, ``gd`` (N, 6), ``grf_n`` (N, 2) ([Fx, Fz] at the toe),
+        ``moments_nm`` (N, 3) (NaN in flight: prescribed kinematics),
+        ``stance_index`` (N,) int (-1 in flight).
+        """
+        t_s = np.asarray(t_s, float)
+        n = len(t_s)
+        out = {
+            "g": np.full((n, 6), np.nan),
+            "gd": np.full((n, 6), np.nan),
+            "grf_n": np.zeros((n, 2)),
+            "moments_nm": np.full((n, 3), np.nan),
+            "stance_index": np.full(n, -1),
+        }
+        for fl in self.flights:
+            sel = (t_s >= fl.t_start_s) & (t_s <= fl.t_start_s + fl.duration_s)
+            if sel.any():
+                out["g"][sel], out["gd"][sel] = fl.evaluate(self.chain, t_s[sel])
+        for rec in self.stances:
+            sel = (t_s >= rec.t_touchdown_s) & (t_s <= rec.t_takeoff_s)
+            if not sel.any():
+                continue
+            st = simulate_resample(self.chain, rec, t_s[sel] - rec.t_touchdown_s)
+            out["g"][sel], out["gd"][sel] = st.g, st.gd
+            out["grf_n"][sel], out["moments_nm"][sel] = st.grf_n, st.moments_nm
+            out["stance_index"][sel] = rec.index
+        return out
+
+
+def simulate_resample(chain: Chain, rec: StanceRecord, t_since_td: np.ndarray) -> StanceSimulation:
+    """The stance of ``rec`` evaluated at other times since touchdown (dense output, no re-integration)."""
+    from hop_impedance.simulation.stance import _collect, _StanceSystem
+
+    system = _StanceSystem(chain, rec.law, rec.surface, rec.touchdown)
+    t = np.clip(np.asarray(t_since_td, float), 0.0, rec.stance.duration_s)
+    ys = rec.stance.dense(t).T
+    return _collect(system, t, ys, rec.stance.end_reason, rec.stance.dense)
+
+
+def _next_touchdown_speed(chain: Chain, stance: StanceSimulation, q_next: np.ndarray) -> tuple[float, float]:
+    """(flight time (s), touchdown COM vertical speed (m/s, positive down)) after a stance."""
+    g, gd = stance.g[-1], stance.gd[-1]
+    vz = com_velocity(chain, g, gd)[1]
+    t_f = flight_time_s(chain, body_com(chain, g)[1], vz, q_next)
+    return t_f, -(vz - chain.gravity_m_s2 * t_f)
+
+
+def calibrate(chain: Chain, config: HoppingConfig, q_td: np.ndarray, speed_guess: float | None = None) -> dict:
+    """Touchdown speed and push-off scale for a periodic hop at ``config.freq_hz``.
+
+    Solves ``next touchdown speed = touchdown speed`` and
+    ``stance + flight = 1 / freq`` in the least-squares sense
+    (``scipy.optimize.least_squares``, bounded: speed 0.2-3 m/s, scale 0-20);
+    without a push-off part only the period equation (touchdown speed only).
+    ``success`` is False when the best compromise misses the speed by more than
+    0.01 m/s or the period by more than 5 ms (e.g. a frequency that the law
+    cannot reach); the caller then reports the achieved values.
+
+    Returns
+    -------
+    dict with ``speed_m_s``, ``push_scale``, ``stance_s``, ``flight_s``,
+    ``d_speed_d_scale`` (controller gain basis), ``success``.
+    """
+    period = 1.0 / config.freq_hz
+    has_push = push_off_part(config.law) is not None
+
+    def run(speed: float, scale: float, q: np.ndarray = q_td, with_vx: bool = False):
+        law = scale_push_off(config.law, scale)
+        td = touchdown_state(chain, q, np.array([0.0, -speed]), 0.0)
+        st = simulate_stance(chain, law, config.surface, td, t_max_s=2.0 * period,
+                             rtol=config.rtol * 100, atol=config.atol * 100)
+        if st.end_reason != "take_off":
+            raise ValueError(f"calibration stance ended by {st.end_reason} at speed {speed:.2f} m/s")
+        t_f, v_next = _next_touchdown_speed(chain, st, q)
+        if with_vx:
+            return com_velocity(chain, st.g[-1], st.gd[-1])[0]
+        return st.duration_s, t_f, v_next
+
+    guess_speed = chain.gravity_m_s2 * 0.4 * period / 2.0 if speed_guess is None else speed_guess
+
+    def residual(x):
+        try:
+            ts, tf, v_next = run(x[0], x[1] if has_push else 1.0)
+        except ValueError:
+            return [1.0, 1.0] if has_push else [1.0]
+        period_error = (ts + tf - period) * 5.0  # 1 ms of period weighs like 5 mm/s of speed
+        return [v_next - x[0], period_error] if has_push else [period_error]
+
+    if has_push:
+        sol = least_squares(residual, [guess_speed, 1.0], bounds=([0.2, 0.0], [3.0, 20.0]),
+                            diff_step=1e-3, xtol=1e-8, ftol=1e-10)
+        speed, scale = float(sol.x[0]), float(sol.x[1])
+    else:
+        sol = least_squares(residual, [guess_speed], bounds=([0.2], [3.0]), diff_step=1e-3, xtol=1e-8)
+        speed, scale = float(sol.x[0]), 1.0
+    ts, tf, v1 = run(speed, scale)
+    slope = 0.0
+    if has_push:
+        _, _, v2 = run(speed, scale + 0.1)
+        slope = (v2 - v1) / 0.1
+    success = abs(v1 - speed) < 0.01 if has_push else True
+    success = success and abs(ts + tf - period) < 0.005
+    # Horizontal balance: the COM offset at touchdown that makes the take-off vx zero (secant, linear).
+    rho_td = np.asarray(config.touchdown_rho_rad, float)
+    base = config.com_ahead_m
+    vx0 = run(speed, scale, touchdown_posture(chain, rho_td, base), True)
+    vx1 = run(speed, scale, touchdown_posture(chain, rho_td, base + 0.01), True)
+    com_ahead = base - vx0 * 0.01 / (vx1 - vx0) if vx1 != vx0 else base
+    return {"speed_m_s": speed, "push_scale": scale, "stance_s": ts, "flight_s": tf,
+            "next_speed_m_s": v1, "d_speed_d_scale": slope, "success": bool(success),
+            "com_ahead_m": float(np.clip(com_ahead, base - 0.05, base + 0.05)),
+            "take_off_vx_m_s": float(vx0), "d_vx_d_com_ahead_s": float((vx1 - vx0) / 0.01)}
+
+
+def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> HoppingTrial:
+    """Simulate ``config.n_hops`` hops; seeded hop-to-hop variability.
+
+    The trial starts ``lead_in_s`` before the first touchdown (in flight) and
+    ends at the apex of the flight after the last stance, so no stance is cut
+    at the recording edges. A stance that does not end in take-off (collapse,
+    too long) or a take-off too weak to fly stops the trial early; the reason
+    is kept in ``stop_reason``.
+    """
+    rng = np.random.default_rng(seed)
+    rho_nom = np.asarray(config.touchdown_rho_rad, float)
+    cal = calibrate(chain, config, touchdown_posture(chain, rho_nom, config.com_ahead_m))
+    notes = []
+    if not cal["success"]:
+        notes.append(
+            f"no exactly periodic hop at {config.freq_hz} Hz on {config.surface.name}: best compromise "
+            f"stance {cal['stance_s']:.3f} s + flight {cal['flight_s']:.3f} s "
+            f"({1.0 / (cal['stance_s'] + cal['flight_s']):.2f} Hz), touchdown speed {cal['speed_m_s']:.2f} -> "
+            f"{cal['next_speed_m_s']:.2f} m/s"
+        )
+    gain = cal["d_speed_d_scale"]
+    period = 1.0 / config.freq_hz
+    g_acc = chain.gravity_m_s2
+
+    def posture(i: int, vx: float, stance_s: float) -> np.ndarray:
+        """Next touchdown posture: nominal + noise, COM placed for horizontal balance (Raibert-style)."""
+        rho = rho_nom + (rng.normal(0.0, config.posture_sd_rad, 3) if i > 0 else 0.0)
+        ahead = cal["com_ahead_m"] - vx * (0.5 * stance_s + config.placement_gain_s)
+        return touchdown_posture(chain, rho, ahead)
+
+    q_td = q_nom = touchdown_posture(chain, rho_nom, cal["com_ahead_m"])
+    speed = cal["speed_m_s"]
+    t_td = config.lead_in_s
+    # Lead-in flight: posture held, COM falling onto the first touchdown.
+    com_td = body_com(chain, np.r_[0.0, 0.0, q_td])
+    com0 = com_td - np.array([0.0, -speed * config.lead_in_s - 0.5 * g_acc * config.lead_in_s**2])
+    vel0 = np.array([0.0, -speed + g_acc * config.lead_in_s])
+    rest = [q_td, np.zeros(4), np.zeros(4)]
+    hold = BPoly.from_derivatives([0.0, config.lead_in_s], np.array([rest, rest]))
+    flights = [Flight(0.0, config.lead_in_s, com0, vel0, hold, g_acc)]
+    stances: list[StanceRecord] = []
+    x_toe, vx_com = 0.0, 0.0
+    stop = ""
+    t_end = config.lead_in_s
+    for i in range(config.n_hops):
+        surface = config.surface_for_hop(i)
+        target = cal["speed_m_s"] * (1.0 + rng.normal(0.0, config.speed_sd))
+        scale = cal["push_scale"]
+        if gain > 0:
+            scale += (target - speed) / gain
+        scale *= 1.0 + rng.normal(0.0, config.push_sd)
+        law = scale_push_off(config.law, scale)
+        td = touchdown_state(chain, q_td, np.array([vx_com, -speed]), x_toe)
+        st = simulate_stance(chain, law, surface, td, t_max_s=2.0 * period, rtol=config.rtol, atol=config.atol)
+        stances.append(StanceRecord(i, t_td, st, surface, law, td))
+        t_end = t_td + st.duration_s
+        if st.end_reason != "take_off":
+            stop = f"hop {i}: stance ended by {st.end_reason} at {st.duration_s:.3f} s"
+            break
+        g_to, gd_to = st.g[-1], st.gd[-1]
+        com_to, v_to = body_com(chain, g_to), com_velocity(chain, g_to, gd_to)
+        q_next = posture(i + 1, float(v_to[0]), st.duration_s)
+        try:
+            t_f = flight_time_s(chain, com_to[1], v_to[1], q_next)
+        except ValueError as exc:
+            stop = f"hop {i}: {exc}"
+            break
+        last = i == config.n_hops - 1
+        if last:  # end at the apex, or after 40 % of the flight if it never rises
+            t_f = max(v_to[1] / g_acc, 0.4 * t_f)
+        com_next = com_to + v_to * t_f - np.array([0.0, 0.5 * g_acc * t_f**2])
+        v_next = v_to - np.array([0.0, g_acc * t_f])
+        td_next = touchdown_state(chain, q_next, v_next, 0.0)
+        angles = BPoly.from_derivatives(
+            [0.0, t_f],
+            np.array([[g_to[2:], gd_to[2:], st.gdd[-1, 2:]], [q_next, td_next.gd[2:], np.zeros(4)]]),
+        )
+        flights.append(Flight(t_end, t_f, com_to, v_to, angles, g_acc))
+        x_toe = float(com_next[0] - body_com(chain, np.r_[0.0, 0.0, q_next])[0])
+        vx_com, speed, q_td = float(v_next[0]), float(-v_next[1]), q_next
+        t_td = t_end + t_f
+        t_end = t_td
+    return HoppingTrial(config, chain, stances, flights, t_end, cal, stop, notes)
+
+
+def leg_stiffness_n_m(chain: Chain, stance: StanceSimulation) -> tuple[float, float, float]:
+    """Seed 001's leg stiffness: peak vertical GRF / maximal leg compression.
+
+    Leg compression is the COM's downward displacement since touchdown minus the
+    surface's (toe's) downward displacement, i.e. the shortening of the vertical
+    COM-toe distance.
+
+    Returns
+    -------
+    (stiffness N/m, peak Fz N, max compression m)
+    """
+    com_z = np.array([body_com(chain, g)[1] for g in stance.g])
+    height = com_z - stance.g[:, 1]
+    compression = float(np.max(height[0] - height))
+    peak = float(np.max(stance.grf_n[:, 1]))
+    return peak / compression, peak, compression
+

@@ -1,0 +1,265 @@
+"""Joint torque laws of the simulator, each a switchable part.
+
+Every law maps time since touchdown, joint angles and velocities (and, for
+path-dependent terms, extra ODE states) to joint moments, **extensor
+positive** (a positive moment acts to decrease rho, see
+:mod:`hop_impedance.biomech.joint_angles`). Joints are ordered ankle, knee, hip.
+
+Laws
+----
+- :class:`Eq3Law`: the seed paper's Eq. 3 stiffness ``K`` and damping ``B``
+  integrated as in Eqs. 4-5 (constant stiffness is the special case with only
+  ``k0``), optionally with a time-based activation that scales its elastic part.
+- :class:`PushOff`: an extensor moment pulse with its own time course late in stance.
+- :class:`CompositeLaw`: the sum of parts.
+
+Integration of Eq. 3 (done here in closed form, independently of the fit code)
+-------------------------------------------------------------------------------
+With ``dr = rho - rho0`` and ``dw = omega - omega0`` (touchdown values):
+
+    M_s = k0 dr + k1 dr^2/2 + k2 dr^3/3 + k3 S
+    M_d = b0 dw + b1 dw^2/2 + b2 dw^3/3 + b3 (dr dw - S)
+    M   = m0 + a(t) M_s + M_d,        dS/dt = (omega - omega0) omega,
+
+because ``int k3 dw d(rho) = k3 int dw omega dt = k3 S`` and, by parts,
+``int b3 dr d(omega) = b3 (dr dw - S)``. ``S`` is one extra ODE state per
+joint (zero at touchdown). ``m0`` is the moment at touchdown (M_s0 + M_d0 of
+Eq. 4), zero by default as measured at touchdown in hopping (seed 001).
+``a(t) = 1`` unless a :class:`TimeActivation` is attached.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+COEFFICIENT_NAMES: tuple[str, ...] = ("m0", "k0", "k1", "k2", "k3", "b0", "b1", "b2", "b3")
+
+
+@dataclass(frozen=True)
+class TouchdownReference:
+    """rho0 and omega0 of Eq. 3: joint angles (rad) and velocities (rad/s) at touchdown, shape (3,)."""
+
+    rho0_rad: np.ndarray
+    omega0_rad_s: np.ndarray
+
+
+class ImpedanceLaw(ABC):
+    """A joint torque law. Arrays broadcast: ``t_s`` shape (...), joint arrays (..., 3)."""
+
+    #: Number of extra ODE states the law integrates during stance.
+    n_states: int = 0
+
+    @abstractmethod
+    def moments_nm(
+        self, t_s: np.ndarray, rho: np.ndarray, omega: np.ndarray, states: np.ndarray, ref: TouchdownReference
+    ) -> np.ndarray:
+        """Joint moments (N m), extensor positive, shape (..., 3).
+
+        Parameters
+        ----------
+        t_s : ndarray, shape (...)
+            Time since touchdown (s).
+        rho, omega : ndarray, shape (..., 3)
+            Joint angles (rad) and angular velocities (rad/s), flexion positive.
+        states : ndarray, shape (..., n_states)
+            The law's extra states.
+        ref : TouchdownReference
+        """
+
+    def state_rates(
+        self, t_s: np.ndarray, rho: np.ndarray, omega: np.ndarray, states: np.ndarray, ref: TouchdownReference
+    ) -> np.ndarray:
+        """Time derivative of the extra states, shape (..., n_states)."""
+        return np.zeros(np.shape(rho)[:-1] + (0,))
+
+    def elastic_energy_j(self, rho: np.ndarray, ref: TouchdownReference) -> np.ndarray:
+        """Energy stored in the joints (J), shape (...); only for conservative laws."""
+        raise NotImplementedError(f"{type(self).__name__} is not conservative")
+
+    @abstractmethod
+    def to_dict(self) -> dict:
+        """Every parameter, JSON-ready."""
+
+
+@dataclass(frozen=True)
+class TimeActivation:
+    """Activation fixed in time since touchdown and blind to the surface (seed 001).
+
+    ``a(t) = a_min + (1 - a_min) (1 - exp(-t / tau))``: the elastic moment
+    rises with time like the active state of a pre-programmed stimulation, so
+    a joint that flexes *earlier* (e.g. on an unexpected hard surface) meets a
+    lower stiffness.
+
+    Attributes
+    ----------
+    a_min : float
+        Activation at touchdown, 0 <= a_min <= 1.
+    tau_s : float
+        Time constant (s), > 0.
+    """
+
+    a_min: float
+    tau_s: float
+
+    def __post_init__(self) -> None:
+        if not (0.0 <= self.a_min <= 1.0 and self.tau_s > 0):
+            raise ValueError(f"activation needs 0 <= a_min <= 1 and tau_s > 0, got {self.a_min}, {self.tau_s}")
+
+    def value(self, t_s: np.ndarray) -> np.ndarray:
+        """a(t) (dimensionless); ``t_s`` is time since touchdown (s)."""
+        t = np.maximum(np.asarray(t_s, float), 0.0)
+        return self.a_min + (1.0 - self.a_min) * (1.0 - np.exp(-t / self.tau_s))
+
+
+def _as3(x: object) -> np.ndarray:
+    arr = np.broadcast_to(np.asarray(x, float), (3,)).copy()
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"impedance coefficients must be finite, got {arr}")
+    return arr
+
+
+@dataclass(frozen=True)
+class Eq3Law(ImpedanceLaw):
+    """The seed's Eq. 3 law, integrated (Eqs. 4-5); each coefficient shape (3,) (ankle, knee, hip).
+
+    Units: m0 N m; k0 N m/rad; k1 N m/rad^2; k2 N m/rad^3; k3 N m s/rad^2;
+    b0 N m s/rad; b1 N m s^2/rad^2; b2 N m s^3/rad^3; b3 N m s/rad^2.
+    """
+
+    m0: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    k0: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    k1: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    k2: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    k3: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    b0: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    b1: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    b2: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    b3: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    activation: TimeActivation | None = None
+
+    n_states = 3
+
+    def __post_init__(self) -> None:
+        for name in COEFFICIENT_NAMES:
+            object.__setattr__(self, name, _as3(getattr(self, name)))
+
+    def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102 (see base class)
+        dr = np.asarray(rho, float) - ref.rho0_rad
+        dw = np.asarray(omega, float) - ref.omega0_rad_s
+        s = np.asarray(states, float)
+        elastic = self.k0 * dr + self.k1 * dr**2 / 2 + self.k2 * dr**3 / 3 + self.k3 * s
+        if self.activation is not None:
+            elastic = self.activation.value(t_s)[..., None] * elastic
+        damping = self.b0 * dw + self.b1 * dw**2 / 2 + self.b2 * dw**3 / 3 + self.b3 * (dr * dw - s)
+        return self.m0 + elastic + damping
+
+    def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102
+        w = np.asarray(omega, float)
+        return (w - ref.omega0_rad_s) * w
+
+    def stiffness_nm_rad(self, rho, omega, ref) -> np.ndarray:
+        """K of Eq. 3 (N m/rad), shape (..., 3), without the activation factor."""
+        dr = np.asarray(rho, float) - ref.rho0_rad
+        dw = np.asarray(omega, float) - ref.omega0_rad_s
+        return self.k0 + self.k1 * dr + self.k2 * dr**2 + self.k3 * dw
+
+    def elastic_energy_j(self, rho, ref):  # noqa: D102
+        if self.activation is not None or np.any(self.k3 != 0):
+            raise NotImplementedError("Eq3Law with k3 or an activation is not conservative")
+        dr = np.asarray(rho, float) - ref.rho0_rad
+        e = self.m0 * dr + self.k0 * dr**2 / 2 + self.k1 * dr**3 / 6 + self.k2 * dr**4 / 12
+        return e.sum(axis=-1)
+
+    def to_dict(self) -> dict:  # noqa: D102
+        out = {"type": "eq3", **{n: getattr(self, n).tolist() for n in COEFFICIENT_NAMES}}
+        out["activation"] = None if self.activation is None else vars(self.activation).copy()
+        return out
+
+
+def constant_stiffness(k0_nm_rad, b0_nm_s_rad=0.0) -> Eq3Law:
+    """Constant stiffness (and optional constant damping): ``M = k0 (rho - rho0) + b0 (omega - omega0)``."""
+    return Eq3Law(k0=k0_nm_rad, b0=b0_nm_s_rad)
+
+
+@dataclass(frozen=True)
+class PushOff(ImpedanceLaw):
+    """Active extensor moment late in stance, fixed in time since touchdown.
+
+    ``M(t) = A sin^2(pi (t - onset) / duration)`` for ``onset <= t <= onset + duration``,
+    zero otherwise; ``A`` per joint (N m, >= 0: extensor). It resupplies the
+    energy that damping and the ground dissipate; the hopping controller sets
+    ``A`` hop by hop.
+    """
+
+    amplitude_nm: np.ndarray
+    onset_s: float
+    duration_s: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "amplitude_nm", _as3(self.amplitude_nm))
+        if not (self.onset_s >= 0 and self.duration_s > 0):
+            raise ValueError(f"push-off needs onset_s >= 0 and duration_s > 0, got {self.onset_s}, {self.duration_s}")
+
+    def profile(self, t_s: np.ndarray) -> np.ndarray:
+        """Time course in [0, 1], shape of ``t_s``."""
+        phase = (np.asarray(t_s, float) - self.onset_s) / self.duration_s
+        inside = (phase >= 0) & (phase <= 1)
+        return np.where(inside, np.sin(np.pi * np.clip(phase, 0, 1)) ** 2, 0.0)
+
+    def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102
+        shape = np.broadcast_shapes(np.shape(t_s), np.shape(rho)[:-1])
+        return np.broadcast_to(self.profile(t_s)[..., None] * self.amplitude_nm, shape + (3,))
+
+    def with_amplitude(self, amplitude_nm) -> "PushOff":
+        """Copy with another amplitude (N m, per joint)."""
+        return PushOff(amplitude_nm, self.onset_s, self.duration_s)
+
+    def to_dict(self) -> dict:  # noqa: D102
+        return {"type": "push_off", "amplitude_nm": self.amplitude_nm.tolist(),
+                "onset_s": self.onset_s, "duration_s": self.duration_s}
+
+
+@dataclass(frozen=True)
+class CompositeLaw(ImpedanceLaw):
+    """Sum of laws; their extra states are concatenated in order."""
+
+    parts: tuple[ImpedanceLaw, ...]
+
+    @property
+    def n_states(self) -> int:  # type: ignore[override]
+        return sum(p.n_states for p in self.parts)
+
+    def _slices(self):
+        start = 0
+        for p in self.parts:
+            yield p, slice(start, start + p.n_states)
+            start += p.n_states
+
+    def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102
+        states = np.asarray(states, float)
+        total = np.zeros(np.broadcast_shapes(np.shape(t_s), np.shape(rho)[:-1]) + (3,))
+        for p, sl in self._slices():
+            total = total + p.moments_nm(t_s, rho, omega, states[..., sl], ref)
+        return total
+
+    def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102
+        states = np.asarray(states, float)
+        rates = [p.state_rates(t_s, rho, omega, states[..., sl], ref) for p, sl in self._slices()]
+        return np.concatenate(rates, axis=-1) if rates else np.zeros(np.shape(rho)[:-1] + (0,))
+
+    def elastic_energy_j(self, rho, ref):  # noqa: D102
+        return sum(p.elastic_energy_j(rho, ref) for p in self.parts)
+
+    def part(self, kind: type) -> ImpedanceLaw | None:
+        """First part of the given type, or None."""
+        return next((p for p in self.parts if isinstance(p, kind)), None)
+
+    def replace_part(self, old: ImpedanceLaw, new: ImpedanceLaw) -> "CompositeLaw":
+        """Copy with ``old`` (by identity) swapped for ``new``."""
+        return CompositeLaw(tuple(new if p is old else p for p in self.parts))
+
+    def to_dict(self) -> dict:  # noqa: D102
+        return {"type": "composite", "parts": [p.to_dict() for p in self.parts]}

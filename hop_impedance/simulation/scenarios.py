@@ -1,0 +1,154 @@
+"""Named simulator configurations and the switchable effects.
+
+Stiffness magnitudes are the seed paper's Table 2 means (k0, k1 per joint and
+frequency); damping b0 = 0.5 N m s/rad ("below 0.72", seed text). Effects that
+the seed did not quantify (k2, k3, b1..b3, activation, push-off) get
+documented illustrative values, each switchable on its own (:class:`Effects`),
+so that the discovery workflow can hide them one at a time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+import numpy as np
+
+from hop_impedance.biomech.body_model import body_model_from_stature
+from hop_impedance.recording import Subject
+from hop_impedance.simulation.dynamics import Chain, chain_from_body_model
+from hop_impedance.simulation.ground import GroundLaw, surface
+from hop_impedance.simulation.hopping_trial import HoppingConfig, touchdown_posture, touchdown_state
+from hop_impedance.simulation.impedance_laws import CompositeLaw, Eq3Law, ImpedanceLaw, PushOff, TimeActivation
+from hop_impedance.simulation.stance import simulate_stance
+
+#: The seed's mean subject (8 women): 54.8 kg, 1.63 m.
+SEED_SUBJECT = Subject("sim_seed_mean", 54.8, 1.63, "female")
+
+#: Seed Table 2, k0 and k1 (N m/rad) for ankle, knee, hip at 1.53, 1.87, 2.20 Hz.
+SEED_TABLE2: dict[float, dict[str, tuple[float, float, float]]] = {
+    1.53: {"k0": (178.5, 110.0, 95.3), "k1": (193.3, 169.3, 161.8)},
+    1.87: {"k0": (223.3, 158.8, 139.4), "k1": (560.8, 541.3, 526.9)},
+    2.20: {"k0": (301.4, 230.9, 175.4), "k1": (948.2, 884.8, 894.8)},
+}
+
+#: Default touchdown joint angles (rad): ankle (sole-shank, 90 deg neutral,
+#: plantarflexed below), knee and hip (pi + flexion).
+DEFAULT_TOUCHDOWN_RHO = (1.25, np.pi + 0.45, np.pi + 0.20)
+
+#: Illustrative magnitudes of effects the seed found insignificant.
+DAMPING_B0 = 0.5  # N m s/rad, seed: "below 0.72"
+EXTRA_K2 = (200.0, 200.0, 100.0)  # N m/rad^3
+EXTRA_K3 = (20.0, 10.0, 5.0)  # N m s/rad^2
+EXTRA_B1 = (0.05, 0.05, 0.02)  # N m s^2/rad^2
+#: Push-off shape over the joints (ankle-dominated) and default base amplitude (N m).
+PUSH_OFF_WEIGHTS = (1.0, 0.6, 0.3)
+PUSH_OFF_BASE_NM = 40.0
+#: Time-based activation (seed 001 / Hurst): a_min and tau (s).
+ACTIVATION = TimeActivation(a_min=0.3, tau_s=0.04)
+
+
+@dataclass(frozen=True)
+class Effects:
+    """Switches for every simulated effect (True = present)."""
+
+    angle_dependent_stiffness: bool = True  # k1 (Table 2)
+    quadratic_stiffness: bool = False  # k2
+    rate_dependent_stiffness: bool = False  # k3
+    damping: bool = True  # b0
+    nonlinear_damping: bool = False  # b1
+    time_activation: bool = False  # stiffness scaled by a(t)
+    push_off: bool = True  # active extensor pulse late in stance
+
+    def to_dict(self) -> dict:
+        """Plain booleans for the truth file."""
+        return asdict(self)
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        """Names of the switches."""
+        return tuple(f.name for f in fields(cls))
+
+
+def nearest_table2(freq_hz: float) -> float:
+    """The Table 2 frequency closest to ``freq_hz``."""
+    return min(SEED_TABLE2, key=lambda f: abs(f - freq_hz))
+
+
+def seed_stiffness(freq_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """k0, k1 (N m/rad) per joint, linearly interpolated in frequency over Table 2 (clamped)."""
+    freqs = np.array(sorted(SEED_TABLE2))
+    k0 = np.array([SEED_TABLE2[f]["k0"] for f in freqs])
+    k1 = np.array([SEED_TABLE2[f]["k1"] for f in freqs])
+    f = float(np.clip(freq_hz, freqs[0], freqs[-1]))
+    return (np.array([np.interp(f, freqs, k0[:, j]) for j in range(3)]),
+            np.array([np.interp(f, freqs, k1[:, j]) for j in range(3)]))
+
+
+def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_duration_s: float) -> ImpedanceLaw:
+    """The joint law for a frequency with the chosen effects."""
+    k0, k1 = seed_stiffness(freq_hz)
+    eq3 = Eq3Law(
+        k0=k0,
+        k1=k1 if effects.angle_dependent_stiffness else 0.0,
+        k2=EXTRA_K2 if effects.quadratic_stiffness else 0.0,
+        k3=EXTRA_K3 if effects.rate_dependent_stiffness else 0.0,
+        b0=DAMPING_B0 if effects.damping else 0.0,
+        b1=EXTRA_B1 if effects.nonlinear_damping else 0.0,
+        activation=ACTIVATION if effects.time_activation else None,
+    )
+    if not effects.push_off:
+        return CompositeLaw((eq3,))
+    push = PushOff(PUSH_OFF_BASE_NM * np.array(PUSH_OFF_WEIGHTS), push_onset_s, push_duration_s)
+    return CompositeLaw((eq3, push))
+
+
+def nominal_stance_s(chain: Chain, law: ImpedanceLaw, ground: GroundLaw, rho_td, freq_hz: float) -> float:
+    """Stance time (s) of one passive stance at a typical touchdown speed, to time the push-off."""
+    q = touchdown_posture(chain, np.asarray(rho_td, float))
+    speed = chain.gravity_m_s2 * 0.4 / freq_hz / 2.0
+    st = simulate_stance(chain, law, ground, touchdown_state(chain, q, np.array([0.0, -speed]), 0.0),
+                         t_max_s=2.0 / freq_hz, rtol=1e-6, atol=1e-8)
+    return st.duration_s
+
+
+def hopping_config(
+    freq_hz: float = 2.2,
+    surface_name: str = "hard",
+    n_hops: int = 10,
+    effects: Effects = Effects(),
+    *,
+    subject: Subject = SEED_SUBJECT,
+    touchdown_rho_rad=DEFAULT_TOUCHDOWN_RHO,
+    unexpected_surface: str | None = None,
+    unexpected_hops: tuple[int, ...] = (),
+    calibration_surface: str | None = None,
+    variability: bool = True,
+) -> tuple[Chain, HoppingConfig]:
+    """A hopping configuration from a few high-level choices.
+
+    The push-off is timed from a passive stance on the calibration surface:
+    onset at 35 % and duration 60 % of that stance. ``calibration_surface``
+    (default: the trial's surface) is the surface the law is tuned for; with
+    ``unexpected_surface`` the listed hops land on that surface instead.
+    """
+    chain = chain_from_body_model(body_model_from_stature(subject))
+    expected = surface(calibration_surface or surface_name)
+    passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0)
+    ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
+    law = build_law(freq_hz, effects, 0.35 * ts, 0.6 * ts)
+    config = HoppingConfig(
+        freq_hz=freq_hz,
+        n_hops=n_hops,
+        surface=expected,
+        law=law,
+        touchdown_rho_rad=tuple(float(r) for r in touchdown_rho_rad),
+        unexpected_surface=surface(unexpected_surface) if unexpected_surface else None,
+        unexpected_hops=tuple(unexpected_hops),
+        posture_sd_rad=0.01 if variability else 0.0,
+        speed_sd=0.02 if variability else 0.0,
+        push_sd=0.03 if variability else 0.0,
+    )
+    if surface_name != (calibration_surface or surface_name):
+        config = HoppingConfig(**{**config.__dict__, "unexpected_surface": surface(surface_name),
+                                  "unexpected_hops": tuple(range(n_hops))})
+    return chain, config
