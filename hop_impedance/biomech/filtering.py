@@ -23,6 +23,7 @@ Choices (documented here, tested in ``test/biomech/test_filtering.py``)
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -85,10 +86,16 @@ def lowpass(x: np.ndarray, fs_hz: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ, o
     x = np.asarray(x, float)
     if not np.all(np.isfinite(x)):
         raise ValueError("lowpass: signal contains NaN or inf; fill gaps first")
-    sos = butter(order, cutoff_hz, btype="low", output="sos", fs=fs_hz)
+    sos = _butter_sos(int(order), float(cutoff_hz), float(fs_hz))
     # Odd-extension padding of three cut-off periods keeps the edge transient short.
     padlen = min(int(np.ceil(3 * fs_hz / cutoff_hz)), x.shape[0] - 1)
     return sosfiltfilt(sos, x, axis=0, padlen=padlen)
+
+
+@lru_cache(maxsize=32)
+def _butter_sos(order: int, cutoff_hz: float, fs_hz: float) -> np.ndarray:
+    """Butterworth low-pass design (cached: designing costs more than filtering a short window)."""
+    return butter(order, cutoff_hz, btype="low", output="sos", fs=fs_hz)
 
 
 def sampling_rate_hz(t_s: np.ndarray) -> float:

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import CubicSpline
+from scipy.sparse import csr_matrix
 
 from hop_impedance.biomech.body_model import BodyModel, body_model, foot_geometry_from_points, with_overrides
 from hop_impedance.biomech.filtering import DEFAULT_CUTOFF_HZ, DEFAULT_MAX_GAP_S, Gap, fill_gaps, lowpass, sampling_rate_hz
@@ -153,6 +154,37 @@ def segment_coms(points_xz: np.ndarray, q: np.ndarray, model: BodyModel) -> np.n
     return points_xz[:, :4, :] + along[None, :, None] * e1 + perp[None, :, None] * e2
 
 
+def _evaluate_spline(
+    spline: CubicSpline, t: np.ndarray, columns: tuple[slice, slice, slice] = (slice(None),) * 3
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Value, first and second derivative of a cubic spline at ``t`` (inside its breakpoints).
+
+    Same numbers as ``spline(t, nu)`` for nu = 0, 1, 2 (to rounding), but the
+    interval search is done once, and each derivative order is one sparse
+    matrix (4 non-zeros per output sample: the powers of the local offset)
+    times the spline's coefficient table: about 2x faster than three calls
+    of ``spline(t, nu)`` on long records. ``columns`` selects which columns
+    are needed for each order.
+    """
+    x, c = spline.x, spline.c  # c: (4, M - 1, columns), highest power first
+    m = len(x) - 1
+    idx = np.clip(np.searchsorted(x, t, side="right") - 1, 0, m - 1)
+    dx = t - x[idx]
+    one, zero = np.ones_like(dx), np.zeros_like(dx)
+    indices = (np.arange(4)[None, :] * m + idx[:, None]).ravel()
+    indptr = np.arange(0, 4 * t.size + 1, 4)
+    table = c.reshape(4 * m, -1)
+    weights = (
+        (dx**3, dx**2, dx, one),
+        (3 * dx**2, 2 * dx, one, zero),
+        (6 * dx, 2 * one, zero, zero),
+    )
+    return tuple(
+        csr_matrix((np.column_stack(w).ravel(), indices, indptr), shape=(t.size, 4 * m)) @ np.ascontiguousarray(table[:, cols])
+        for w, cols in zip(weights, columns)
+    )
+
+
 def compute_kinematics(
     marker_t_s: np.ndarray,
     markers_xz: np.ndarray,
@@ -195,17 +227,22 @@ def compute_kinematics(
     com = segment_coms(points, q, model)
     t_out = np.asarray(t_out_s, float)
     inside = (t_out >= marker_t_s[0]) & (t_out <= marker_t_s[-1])
-    sp_pts = CubicSpline(marker_t_s, points, axis=0)
-    sp_q = CubicSpline(marker_t_s, q, axis=0)
-    sp_com = CubicSpline(marker_t_s, com, axis=0)
     tin = t_out[inside]
+    # One spline through every signal: points (10 columns), q (4), COM (8).
+    n_m = len(marker_t_s)
+    stacked = np.concatenate([points.reshape(n_m, -1), q, com.reshape(n_m, -1)], axis=1)
+    spline = CubicSpline(marker_t_s, stacked, axis=0)
+    # Needed: all values; rates of q; accelerations of q and the COMs.
+    value, rate, accel = _evaluate_spline(spline, tin, (slice(None), slice(10, 14), slice(10, 22)))
 
-    def on_out(values: np.ndarray) -> np.ndarray:
-        full = np.full((t_out.size,) + values.shape[1:], np.nan)
-        full[inside] = values
+    def on_out(values: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+        if tin.size == t_out.size:
+            return np.ascontiguousarray(values).reshape((-1,) + shape)
+        full = np.full((t_out.size,) + shape, np.nan)
+        full[inside] = values.reshape((-1,) + shape)
         return full
 
-    qv, qd, qdd = (on_out(sp_q(tin, k)) for k in range(3))
+    qv, qd, qdd = on_out(value[:, 10:14], (4,)), on_out(rate, (4,)), on_out(accel[:, :4], (4,))
     alpha = model.foot_geometry.alpha_rad
     rho = joint_angles(qv, alpha)
     rhod = np.stack([qd[:, 0] - qd[:, 1], qd[:, 2] - qd[:, 1], qd[:, 2] - qd[:, 3]], axis=1)
@@ -215,14 +252,14 @@ def compute_kinematics(
     reliable[inside] = np.interp(tin, marker_t_s, ok_m) >= 1.0
     kin = Kinematics(
         t_s=t_out,
-        points_xz=on_out(sp_pts(tin)),
+        points_xz=on_out(value[:, :10], (5, 2)),
         q=qv,
         qd=qd,
         qdd=qdd,
         rho=rho,
         rhod=rhod,
-        com_xz=on_out(sp_com(tin)),
-        com_acc=on_out(sp_com(tin, 2)),
+        com_xz=on_out(value[:, 14:], (4, 2)),
+        com_acc=on_out(accel[:, 4:], (4, 2)),
         reliable=reliable,
     )
     return kin, gaps
