@@ -164,6 +164,20 @@ def _is_singular(X: np.ndarray) -> bool:
     return bool(s[-1] < 1e-10 * s[0])
 
 
+def _exactly_explained(X: np.ndarray) -> np.ndarray:
+    """For each non-intercept column: is it (numerically) a combination of the others?"""
+    flags = []
+    for j in range(1, X.shape[1]):
+        col = X[:, j]
+        if not np.any(col):
+            flags.append(True)
+            continue
+        others = np.delete(X, j, axis=1)
+        beta = np.linalg.lstsq(others, col, rcond=None)[0]
+        flags.append(bool(np.linalg.norm(col - others @ beta) <= 1e-8 * np.linalg.norm(col)))
+    return np.array(flags)
+
+
 def reduce_model(
     term_columns: np.ndarray,
     moment_nm: np.ndarray,
@@ -174,7 +188,7 @@ def reduce_model(
     intercept: np.ndarray | None = None,
     sse_function: Callable[[tuple[str, ...]], float] | None = None,
     effective_samples: float | None = None,
-    familywise: bool = True,
+    familywise: bool = False,
 ) -> ReductionResult:
     """Backward elimination of Eq. 3 terms by partial F-tests.
 
@@ -217,11 +231,13 @@ def reduce_model(
     def build(names: Sequence[str]) -> np.ndarray:
         return np.column_stack([ones] + [design[name] for name in names])
 
-    # 1. exact collinearity (or zero columns): remove until the design has full rank.
+    # 1. exact collinearity (or zero columns): remove until the design has full rank,
+    #    the highest-order exactly-explained term first (respecting the hierarchy).
     while active and _is_singular(build(active)):
-        vif = variance_inflation_factors(build(active)[:, 1:])
-        zero = [name for name in active if not np.any(design[name])]
-        worst = zero[0] if zero else active[int(np.argmax(np.where(np.isfinite(vif), vif, np.inf)))]
+        explained = _exactly_explained(build(active))
+        dependent = [name for name, flag in zip(active, explained) if flag]
+        eligible = [t for t in dependent if not any(h in active for h in HIGHER_ORDER_TERMS[t])]
+        worst = (eligible or dependent or active)[-1]
         steps.append(EliminationStep(worst, "singular", float("nan"), 0.0, float("inf")))
         active.remove(worst)
 

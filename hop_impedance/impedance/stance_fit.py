@@ -163,8 +163,8 @@ class JointImpedanceFit:
         return float(self.stiffness.max()) if self.stiffness.size else float("nan")
 
 
-def _rejected(reason: str, **extra) -> JointImpedanceFit:
-    return JointImpedanceFit(status="rejected", rejection_reason=reason, **extra)
+def _rejected(reason: str, status: str = "rejected", **extra) -> JointImpedanceFit:
+    return JointImpedanceFit(status=status, rejection_reason=reason, **extra)
 
 
 def validate_stance(
@@ -311,7 +311,9 @@ def fit_joint_stance(
     A, _ = constraint_rows(regs, columns)
     solution = solver.solve(X, tau, A)
     if not solution.converged:
-        return _rejected(f"OSQP did not converge: status '{solution.status}'", terms=terms, **common)
+        return _rejected(
+            f"OSQP did not converge: status '{solution.status}'", status=solution.status, terms=terms, **common
+        )
 
     theta = np.zeros(len(PARAMETER_NAMES))
     theta[columns] = solution.coefficients
