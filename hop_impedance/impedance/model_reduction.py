@@ -13,10 +13,14 @@ Start from all eight terms (the intercept m0 is always kept). Repeat:
 3. For each eligible term the partial F statistic for dropping it,
    ``F = ((SSE_without - SSE_with) / 1) / (SSE_with / (n - p))`` (= t^2 for OLS),
    gives a p-value from F(1, n_eff - p).
-4. Candidates are the eligible terms with p > alpha (default 0.05). If any
-   candidate has a variance inflation factor above ``vif_limit`` the most
-   collinear one (largest VIF; the seed's "offending predictor") is removed,
-   otherwise the least significant (largest p). Stop when no candidate is left.
+4. Candidates are the eligible terms with p > alpha (default 0.05). If some
+   candidates have a variance inflation factor above ``vif_limit`` (the seed's
+   "offending", collinear predictors) the one among them whose removal costs
+   least fit (smallest partial F) is removed, otherwise the candidate with the
+   smallest partial F. Stop when no candidate is left. (Smallest F rather than
+   largest VIF or largest p: when the model has at least as many parameters as
+   effective samples every p is 1, and removing the most collinear term first
+   would throw out k1, which is collinear with k2 and k3 but carries the fit.)
 
 Exactly collinear terms (rank-deficient design) are removed first, largest VIF
 first, with reason ``"singular"``.
@@ -236,8 +240,10 @@ def reduce_model(
     while active and _is_singular(build(active)):
         explained = _exactly_explained(build(active))
         dependent = [name for name, flag in zip(active, explained) if flag]
+        if not dependent:  # ill-conditioned but no column is an exact combination: keep all
+            break
         eligible = [t for t in dependent if not any(h in active for h in HIGHER_ORDER_TERMS[t])]
-        worst = (eligible or dependent or active)[-1]
+        worst = (eligible or dependent)[-1]
         steps.append(EliminationStep(worst, "singular", float("nan"), 0.0, float("inf")))
         active.remove(worst)
 
@@ -286,11 +292,13 @@ def reduce_model(
             break
         vif = vifs(active)
         collinear = [t for t in candidates if vif[t] > vif_limit]
+        # Smallest partial F = smallest loss of fit (equal to the largest p when
+        # the test has degrees of freedom; still defined when n_eff <= p).
         if collinear:
-            worst = max(collinear, key=lambda t: vif[t])
+            worst = min(collinear, key=lambda t: tests[t][0])
             reason = "collinear"
         else:
-            worst = max(candidates, key=lambda t: tests[t][1])
+            worst = min(candidates, key=lambda t: tests[t][0])
             reason = "not significant"
         steps.append(EliminationStep(worst, reason, tests[worst][1], tests[worst][0], float(vif[worst])))
         active.remove(worst)
