@@ -98,7 +98,7 @@ class HoppingConfig:
     speed_sd: float = 0.02
     push_sd: float = 0.03
     placement_gain_s: float = 0.05
-    lead_in_s: float = 0.15
+    lead_in_s: float = 0.4
     rtol: float = DEFAULT_RTOL
     atol: float = DEFAULT_ATOL
 
@@ -392,7 +392,7 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
     t_td = config.lead_in_s
     # Lead-in flight: posture held, COM falling onto the first touchdown.
     com_td = body_com(chain, np.r_[0.0, 0.0, q_td])
-    com0 = com_td - np.array([0.0, -speed * config.lead_in_s - 0.5 * g_acc * config.lead_in_s**2])
+    com0 = com_td + np.array([0.0, speed * config.lead_in_s - 0.5 * g_acc * config.lead_in_s**2])
     vel0 = np.array([0.0, -speed + g_acc * config.lead_in_s])
     rest = [q_td, np.zeros(4), np.zeros(4)]
     hold = BPoly.from_derivatives([0.0, config.lead_in_s], np.array([rest, rest]))

@@ -1,0 +1,109 @@
+"""``hop-impedance simulate``: a simulated hopping trial as a contract recording plus its truth file."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+SURFACES = ("hard", "soft", "rigid")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "simulate",
+        help="simulate hopping and write a contract MCAP recording plus REC.truth.json",
+        description="Forward-dynamics hopping of the four-segment model with the seed paper's joint "
+        "stiffness (Table 2, interpolated in frequency) on a chosen surface. Writes OUT (MCAP) and "
+        "OUT's stem + .truth.json with every parameter, per-stance events, true joint moments and "
+        "impedance coefficients. Every law and sensor effect can be switched on or off.",
+    )
+    p.add_argument("--freq", type=float, default=2.2, help="target hop frequency, Hz (default 2.2)")
+    p.add_argument("--surface", choices=SURFACES, default="hard", help="surface under the hops (default hard)")
+    p.add_argument("--hops", type=int, default=10, help="number of hops (default 10)")
+    p.add_argument("--seed", type=int, default=1, help="seed of variability and noise (default 1)")
+    p.add_argument("--out", required=True, help="output recording, .mcap")
+    p.add_argument("--tuned-for", choices=SURFACES, default=None,
+                   help="surface the law is tuned (calibrated) for; default --surface. "
+                   "--tuned-for soft --surface hard = unexpected hard surface (seed 001)")
+    p.add_argument("--unexpected", choices=SURFACES, default=None,
+                   help="surface swapped in, without re-tuning, on the hops of --unexpected-hops")
+    p.add_argument("--unexpected-hops", default="", help="comma-separated 0-based hop indices, e.g. 5,6")
+    p.add_argument("--mass", type=float, default=54.8, help="body mass, kg (default: seed mean 54.8)")
+    p.add_argument("--height", type=float, default=1.63, help="body height, m (default: seed mean 1.63)")
+    p.add_argument("--no-variability", action="store_true", help="identical hops (no hop-to-hop variability)")
+    law = p.add_argument_group("impedance law effects (each on/off)")
+    law.add_argument("--law", choices=("seed", "constant"), default="seed",
+                     help="seed: k0 + k1 (rho - rho0) (Eq. 10); constant: k0 only")
+    for flag, default, text in (
+        ("quadratic-stiffness", False, "k2 term of Eq. 3"),
+        ("rate-stiffness", False, "k3 term of Eq. 3 (rate-dependent stiffness)"),
+        ("damping", True, "b0 damping (0.5 N m s/rad)"),
+        ("nonlinear-damping", False, "b1 term of Eq. 3"),
+        ("activation", False, "time-based activation scaling the stiffness (seed 001)"),
+        ("push-off", True, "active extensor push-off late in stance"),
+    ):
+        law.add_argument(f"--{flag}", action=argparse.BooleanOptionalAction, default=default,
+                         help=f"{text} (default {'on' if default else 'off'})")
+    sens = p.add_argument_group("sensors")
+    sens.add_argument("--noise", choices=("realistic", "none"), default="realistic",
+                      help="realistic: 2 N force, 0.5 N m torque, 1 mm markers; none: noise-free")
+    sens.add_argument("--force-rate", type=float, default=1000.0, help="force-plate rate, Hz (default 1000)")
+    sens.add_argument("--marker-rate", type=float, default=100.0, help="marker rate, Hz (default 100)")
+    sens.add_argument("--force-noise", type=float, default=None, help="force noise SD, N (overrides --noise)")
+    sens.add_argument("--marker-noise", type=float, default=None, help="marker noise SD, m (overrides --noise)")
+    sens.add_argument("--force-offset", type=float, default=0.0, help="constant Fz offset, N (default 0)")
+    sens.add_argument("--marker-delay", type=float, default=0.0,
+                      help="marker stream time offset, s: a marker stamped t shows the body at t - delay")
+    sens.add_argument("--occlusions", type=float, default=0.0, help="occlusions per second (default 0)")
+    p.set_defaults(func=run)
+
+
+def _hops(text: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise ValueError(f"--unexpected-hops must be comma-separated integers, got {text!r}") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    from hop_impedance.recording import Subject
+    from hop_impedance.simulation.scenarios import Effects
+    from hop_impedance.simulation.sensors import SensorConfig
+    from hop_impedance.simulation.simulate import simulate_recording, write_simulated_recording
+
+    if args.hops < 1:
+        raise ValueError(f"--hops must be at least 1, got {args.hops}")
+    effects = Effects(
+        angle_dependent_stiffness=args.law == "seed",
+        quadratic_stiffness=args.quadratic_stiffness,
+        rate_dependent_stiffness=args.rate_stiffness,
+        damping=args.damping,
+        nonlinear_damping=args.nonlinear_damping,
+        time_activation=args.activation,
+        push_off=args.push_off,
+    )
+    realistic = args.noise == "realistic"
+    sensors = SensorConfig(
+        force_rate_hz=args.force_rate,
+        marker_rate_hz=args.marker_rate,
+        force_noise_n=args.force_noise if args.force_noise is not None else (2.0 if realistic else 0.0),
+        torque_noise_nm=0.5 if realistic else 0.0,
+        force_offset_n=args.force_offset,
+        marker_noise_m=args.marker_noise if args.marker_noise is not None else (0.001 if realistic else 0.0),
+        occlusions_per_s=args.occlusions,
+        marker_time_offset_s=args.marker_delay,
+    )
+    subject = Subject("sim", args.mass, args.height, "female")
+    rec, truth = simulate_recording(
+        args.freq, args.surface, args.hops, args.seed, effects, sensors, subject=subject,
+        tuned_for=args.tuned_for, unexpected_surface=args.unexpected, unexpected_hops=_hops(args.unexpected_hops),
+        variability=not args.no_variability, generator={"argv": sys.argv[1:]},
+    )
+    tpath = write_simulated_recording(args.out, rec, truth)
+    n = len(truth["stances"])
+    durations = [s["duration_s"] for s in truth["stances"]]
+    print(f"wrote {args.out} ({n} stances, {truth['recording']['duration_s']:.2f} s, "
+          f"stance {min(durations):.3f}-{max(durations):.3f} s) and {tpath}")
+    for note in truth["notes"] + ([truth["stop_reason"]] if truth["stop_reason"] else []):
+        print(f"note: {note}")
+    return 0

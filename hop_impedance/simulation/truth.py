@@ -1,0 +1,157 @@
+"""The truth file written next to a simulated recording (``REC.truth.json``).
+
+Layout (format ``hop_impedance.simulation.truth/1``)
+-----------------------------------------------------
+- ``generator``: command line / parameters that produced the file; ``seed``.
+- ``subject``, ``body_model`` (segment parameters, alpha), ``effects``
+  (every switch), ``law`` (every parameter), ``surface`` and
+  ``unexpected_surface`` (law parameters), ``sensors`` (rates, noise, offset,
+  stream time offset, the occlusion spans drawn), ``config``, ``calibration``.
+- ``recording``: ``start_ns`` (stamp of t = 0 s), ``duration_s``.
+- ``stances``: one entry per simulated stance, in order, with
+  ``touchdown_s``/``takeoff_s`` (s since ``start_ns``, force-plate time) and
+  their stamps (ns), ``duration_s``, ``surface``, ``end_reason``, peak GRF
+  (N and body weights), seed 001 leg stiffness and compression, the Eq. 3
+  coefficients per joint (``m0, k0..k3, b0..b3``, with ``rho0_rad`` and
+  ``omega0_rad_s`` at touchdown; ``activation`` and ``push_off`` where
+  present), and ``samples``: the true joint angles (rad), velocities (rad/s),
+  moments (N m, extensor positive) and GRF ``[Fx, Fz]`` (N) at every
+  force-plate sample inside the stance (``t_s`` in recording time).
+
+Numbers in ``samples`` are rounded to 7 significant digits to keep files small.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from hop_impedance.biomech.body_model import BodyModel
+from hop_impedance.biomech.joint_angles import JOINT_NAMES
+from hop_impedance.recording import Subject
+from hop_impedance.simulation.hopping_trial import HoppingTrial, StanceRecord, leg_stiffness_n_m, simulate_resample
+from hop_impedance.simulation.impedance_laws import COEFFICIENT_NAMES, CompositeLaw, Eq3Law, PushOff
+from hop_impedance.simulation.sensors import SensorConfig, sample_times_s, stamps_ns
+
+TRUTH_FORMAT = "hop_impedance.simulation.truth/1"
+
+
+def truth_path(recording_path: str | Path) -> Path:
+    """``REC.mcap`` -> ``REC.truth.json`` (same folder)."""
+    p = Path(recording_path)
+    return p.with_name(p.stem + ".truth.json")
+
+
+def _round(a: np.ndarray) -> list:
+    return np.vectorize(lambda v: float(f"{v:.7g}"))(np.asarray(a, float)).tolist() if np.size(a) else []
+
+
+def _law_part(law, kind):
+    if isinstance(law, kind):
+        return law
+    if isinstance(law, CompositeLaw):
+        return law.part(kind)
+    return None
+
+
+def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, weight_n: float) -> dict:
+    """Truth entry of one stance (see module docstring)."""
+    rate = sensors.force_rate_hz
+    t_all = sample_times_s(trial.t_end_s, rate)
+    t_in = t_all[(t_all >= rec.t_touchdown_s) & (t_all <= rec.t_takeoff_s)]
+    st = simulate_resample(trial.chain, rec, t_in - rec.t_touchdown_s)
+    k_leg, peak, compression = leg_stiffness_n_m(trial.chain, rec.stance)
+    eq3 = _law_part(rec.law, Eq3Law)
+    push = _law_part(rec.law, PushOff)
+    impedance = {}
+    for j, name in enumerate(JOINT_NAMES):
+        entry = {c: (float(getattr(eq3, c)[j]) if eq3 is not None else 0.0) for c in COEFFICIENT_NAMES}
+        entry["rho0_rad"] = float(rec.stance.ref.rho0_rad[j])
+        entry["omega0_rad_s"] = float(rec.stance.ref.omega0_rad_s[j])
+        impedance[name] = entry
+    start = sensors.start_ns
+    return {
+        "index": rec.index,
+        "touchdown_s": rec.t_touchdown_s,
+        "takeoff_s": rec.t_takeoff_s,
+        "touchdown_stamp_ns": int(stamps_ns(np.array([rec.t_touchdown_s]), start)[0]),
+        "takeoff_stamp_ns": int(stamps_ns(np.array([rec.t_takeoff_s]), start)[0]),
+        "duration_s": rec.stance.duration_s,
+        "surface": rec.surface.name,
+        "end_reason": rec.stance.end_reason,
+        "peak_grf_n": peak,
+        "peak_grf_bw": peak / weight_n,
+        "leg_stiffness_n_m": k_leg,
+        "leg_compression_m": compression,
+        "impedance": impedance,
+        "activation": None if eq3 is None or eq3.activation is None else vars(eq3.activation).copy(),
+        "push_off": None if push is None else push.to_dict(),
+        "samples": {
+            "rate_hz": rate,
+            "t_s": _round(t_in),
+            "rho_rad": _round(st.rho_rad),
+            "omega_rad_s": _round(st.omega_rad_s),
+            "moments_nm": _round(st.moments_nm),
+            "grf_n": _round(st.grf_n),
+        },
+    }
+
+
+def trial_truth(
+    trial: HoppingTrial,
+    sensors: SensorConfig,
+    subject: Subject,
+    model: BodyModel,
+    effects: dict,
+    sensor_truth: dict,
+    generator: dict,
+) -> dict:
+    """The whole truth document of a simulated recording."""
+    cfg = trial.config
+    return {
+        "format": TRUTH_FORMAT,
+        "generator": generator,
+        "subject": {"subject_id": subject.subject_id, "body_mass_kg": subject.body_mass_kg,
+                    "body_height_m": subject.body_height_m, "sex": subject.sex},
+        "body_model": {
+            "segments": {s.name: {"mass_kg": s.mass_kg, "length_m": s.length_m, "com_along_m": s.com_along_m,
+                                  "com_perp_m": s.com_perp_m, "inertia_kgm2": s.inertia_kgm2}
+                         for s in model.segments},
+            "alpha_rad": model.foot_geometry.alpha_rad,
+        },
+        "effects": effects,
+        "law": cfg.law.to_dict(),
+        "surface": cfg.surface.to_dict(),
+        "unexpected_surface": None if cfg.unexpected_surface is None else cfg.unexpected_surface.to_dict(),
+        "sensors": {**sensors.to_dict(), **sensor_truth},
+        "config": {
+            "freq_hz": cfg.freq_hz, "n_hops": cfg.n_hops, "touchdown_rho_rad": list(cfg.touchdown_rho_rad),
+            "unexpected_hops": list(cfg.unexpected_hops), "posture_sd_rad": cfg.posture_sd_rad,
+            "speed_sd": cfg.speed_sd, "push_sd": cfg.push_sd, "placement_gain_s": cfg.placement_gain_s,
+            "lead_in_s": cfg.lead_in_s, "rtol": cfg.rtol, "atol": cfg.atol,
+            "flight_model": "COM ballistic, segment angles prescribed (quintic); force plate zero",
+            "horizontal_contact": "no-slip kinematic constraint at the toe",
+        },
+        "calibration": {k: (bool(v) if isinstance(v, (bool, np.bool_)) else float(v)) for k, v in trial.calibration.items()},
+        "recording": {"start_ns": sensors.start_ns, "duration_s": trial.t_end_s},
+        "stop_reason": trial.stop_reason,
+        "notes": list(trial.notes),
+        "stances": [stance_truth(trial, rec, sensors, subject.body_weight_n) for rec in trial.stances],
+    }
+
+
+def write_truth(path: str | Path, truth: dict) -> None:
+    """Write the truth document as compact JSON."""
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(truth, fh, separators=(",", ":"))
+
+
+def load_truth(path: str | Path) -> dict:
+    """Read a truth file; checks the format tag."""
+    with open(path, encoding="utf-8") as fh:
+        data = json.load(fh)
+    if data.get("format") != TRUTH_FORMAT:
+        raise ValueError(f"{path}: not a simulator truth file (format {data.get('format')!r}, expected {TRUTH_FORMAT!r})")
+    return data
