@@ -9,8 +9,8 @@ Scaling: the columns of X differ by orders of magnitude (k2 multiplies rad^3,
 b2 (rad/s)^3), so the QP is solved in ``theta_s = s * theta / |tau|`` with
 ``s`` the column norms of X, and each constraint row is normalised to unit
 norm. OSQP then sees an objective of order 1 and unit-norm rows, converges to
-``eps_abs = eps_rel = 1e-9`` and is polished. The solution is unscaled before
-it is returned. Only OSQP status ``solved`` counts as converged; anything else
+``eps_abs = eps_rel = 1e-9`` or is polished (exact solution of the KKT system
+of the identified active set). The solution is unscaled before it is returned. Only OSQP status ``solved`` counts as converged; anything else
 ("solved inaccurate", "maximum iterations reached", "primal infeasible", ...)
 is reported so the caller can reject the stance.
 """
@@ -86,9 +86,14 @@ class ConstrainedLeastSquares:
         OSQP ``eps_abs`` and ``eps_rel`` on the scaled problem.
     max_iter : int
         OSQP iteration limit; reaching it is reported as not converged.
+    coarse_eps : float
+        Tolerance of the first ADMM stage, whose result is accepted only when
+        OSQP's polishing succeeds (exact active-set solution) or no
+        constraint is active; otherwise ADMM continues to ``eps``.
     """
 
-    def __init__(self, eps: float = 1e-9, max_iter: int = 20000) -> None:
+    def __init__(self, eps: float = 1e-9, max_iter: int = 20000, coarse_eps: float = 1e-5) -> None:
+        self.coarse_eps = coarse_eps
         self.settings = dict(
             eps_abs=eps,
             eps_rel=eps,
@@ -153,7 +158,15 @@ class ConstrainedLeastSquares:
             self._solver.warm_start(x=x_ols)
         else:
             self._solver.warm_start(x=self._last_x[p])
+        # Two stages: a coarse ADMM solve identifies the active set and OSQP's
+        # polishing then solves the reduced KKT system exactly (fast, exact);
+        # only if polishing fails is ADMM continued (warm) to the tight tolerance.
+        self._solver.update_settings(eps_abs=self.coarse_eps, eps_rel=self.coarse_eps)
         result = self._solver.solve(raise_error=False)
+        exact = ols_feasible or int(result.info.status_polish) == 1
+        if str(result.info.status) != "solved" or not exact:
+            self._solver.update_settings(eps_abs=self.settings["eps_abs"], eps_rel=self.settings["eps_rel"])
+            result = self._solver.solve(raise_error=False)
         status = str(result.info.status)
         xs = np.asarray(result.x, float)
         converged = status == "solved" and np.all(np.isfinite(xs))
