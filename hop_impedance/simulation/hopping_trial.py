@@ -53,6 +53,10 @@ from hop_impedance.simulation.stance import (
 )
 
 
+#: A contact shorter than this is a bounce of the foot, not a hop (s).
+MIN_HOP_STANCE_S = 0.05
+
+
 @dataclass(frozen=True)
 class HoppingConfig:
     """Everything that defines a hopping trial (all SI).
@@ -415,6 +419,9 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
         t_end = t_td + st.duration_s
         if st.end_reason != "take_off":
             stop = f"hop {i}: stance ended by {st.end_reason} at {st.duration_s:.3f} s"
+            break
+        if st.duration_s < MIN_HOP_STANCE_S:
+            stop = f"hop {i}: the foot bounced off after {st.duration_s * 1000:.0f} ms (joints too soft?)"
             break
         g_to, gd_to = st.g[-1], st.gd[-1]
         com_to, v_to = body_com(chain, g_to), com_velocity(chain, g_to, gd_to)

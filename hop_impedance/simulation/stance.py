@@ -9,7 +9,8 @@ Integration: ``scipy.integrate.solve_ivp`` with ``LSODA`` (switches to a stiff
 method on the rigid surface), ``rtol = 1e-8``, ``atol = 1e-10`` by default,
 dense output. Stance ends at the first of: the ground force reaches zero while
 the toe rises (take-off), the toe leaves the surface (``y`` crosses 0 upward),
-the body collapses (COM below ``collapse_height_m``), or ``t_max_s``.
+the body collapses (COM below ``collapse_height_m`` above the toe, or a joint
+more than 1.5 rad from its touchdown angle), or ``t_max_s``.
 """
 
 from __future__ import annotations
@@ -36,6 +37,8 @@ STANCE_FREE = np.array([False, True, True, True, True, True])
 
 DEFAULT_RTOL = 1e-8
 DEFAULT_ATOL = 1e-10
+#: A joint moving further than this from its touchdown angle has collapsed (rad).
+MAX_JOINT_EXCURSION_RAD = 1.5
 #: Contact that ends sooner than this after touchdown is a bounce, not a stance.
 MIN_STANCE_S = 0.02
 
@@ -191,16 +194,21 @@ def simulate_stance(
         g, _, _ = system.unpack(y)
         return body_com(chain, g)[1] - g[1] - collapse_height_m
 
+    def overflexion(t, y):  # a joint leaves the anatomical range
+        rho = JOINT_JACOBIAN @ y[1:5] + system.rho_offset
+        return MAX_JOINT_EXCURSION_RAD - np.abs(rho - system.ref.rho0_rad).max()
+
     lift_off.terminal, lift_off.direction = True, -1
     leaves_surface.terminal, leaves_surface.direction = True, 1
     collapse.terminal, collapse.direction = True, -1
+    overflexion.terminal, overflexion.direction = True, -1
     sol = solve_ivp(
         system.rhs, (0.0, t_max_s), y0, method="LSODA", rtol=rtol, atol=atol,
-        dense_output=True, events=(lift_off, leaves_surface, collapse),
+        dense_output=True, events=(lift_off, leaves_surface, collapse, overflexion),
     )
     if sol.status == -1:
         raise RuntimeError(f"stance integration failed: {sol.message}")
-    if len(sol.t_events[2]):
+    if len(sol.t_events[2]) or len(sol.t_events[3]):
         end = "collapse"
     elif len(sol.t_events[0]) or len(sol.t_events[1]):
         end = "take_off"

@@ -15,8 +15,10 @@ Layout (format ``hop_impedance.simulation.truth/1``)
   coefficients per joint (``m0, k0..k3, b0..b3``, with ``rho0_rad`` and
   ``omega0_rad_s`` at touchdown; ``activation`` and ``push_off`` where
   present), and ``samples``: the true joint angles (rad), velocities (rad/s),
-  moments (N m, extensor positive) and GRF ``[Fx, Fz]`` (N) at every
-  force-plate sample inside the stance (``t_s`` in recording time).
+  net moments (N m, extensor positive), the same split into the Eq. 3 part
+  (``eq3_moments_nm``, incl. activation) and the push-off part
+  (``push_off_moments_nm``), and GRF ``[Fx, Fz]`` (N) at every force-plate
+  sample inside the stance (``t_s`` in recording time).
 
 Numbers in ``samples`` are rounded to 7 significant digits to keep files small.
 """
@@ -54,6 +56,14 @@ def _law_part(law, kind):
     if isinstance(law, CompositeLaw):
         return law.part(kind)
     return None
+
+
+def _part_moments(part, st) -> np.ndarray:
+    """Moments (N m) of one law part along a stance; zeros if the part is absent."""
+    if part is None:
+        return np.zeros_like(st.moments_nm)
+    states = st.law_states[:, : part.n_states] if isinstance(part, Eq3Law) else st.law_states[:, :0]
+    return part.moments_nm(st.t_s, st.rho_rad, st.omega_rad_s, states, st.ref)
 
 
 def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, weight_n: float) -> dict:
@@ -94,6 +104,8 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
             "rho_rad": _round(st.rho_rad),
             "omega_rad_s": _round(st.omega_rad_s),
             "moments_nm": _round(st.moments_nm),
+            "eq3_moments_nm": _round(_part_moments(eq3, st)),
+            "push_off_moments_nm": _round(_part_moments(push, st)),
             "grf_n": _round(st.grf_n),
         },
     }
