@@ -1,0 +1,189 @@
+"""Hop sequencing, sensors, truth file, command line and the round trip through the analysis."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from hop_impedance.recording import MARKER_NAMES
+from hop_impedance.simulation.ground import HARD, SOFT
+from hop_impedance.simulation.hopping_trial import (
+    calibrate,
+    leg_stiffness_n_m,
+    scale_push_off,
+    simulate_hopping,
+    touchdown_posture,
+    touchdown_state,
+)
+from hop_impedance.simulation.scenarios import Effects, hopping_config
+from hop_impedance.simulation.sensors import SensorConfig, noise_free, sample_recording
+from hop_impedance.simulation.simulate import simulate_recording
+from hop_impedance.simulation.stance import simulate_stance
+from hop_impedance.simulation.truth import load_truth, truth_path
+
+
+@pytest.fixture(scope="module")
+def trial_22():
+    chain, cfg = hopping_config(2.2, "hard", 4)
+    return simulate_hopping(chain, cfg, seed=1)
+
+
+@pytest.fixture(scope="module")
+def clean_recording():
+    return simulate_recording(2.2, "hard", 4, seed=1, sensors=noise_free(SensorConfig()))
+
+
+def test_hopping_holds_the_target_frequency_in_place(trial_22):
+    assert trial_22.stop_reason == ""
+    assert trial_22.calibration["success"]
+    td = np.array([s.t_touchdown_s for s in trial_22.stances])
+    assert len(td) == 4
+    periods = np.diff(td)
+    assert np.mean(periods) == pytest.approx(1 / 2.2, rel=0.03)
+    assert np.std(periods) > 1e-4  # hop-to-hop variability is present
+    x_toe = [s.touchdown.g[0] for s in trial_22.stances]
+    assert np.ptp(x_toe) < 0.1  # stays on the plate
+    for rec in trial_22.stances:
+        assert rec.stance.end_reason == "take_off"
+        assert 0.1 < rec.stance.duration_s < 0.35
+
+
+def test_flight_is_ballistic_and_force_free(trial_22):
+    fl = trial_22.flights[2]
+    t = np.linspace(fl.t_start_s + 1e-6, fl.t_start_s + fl.duration_s - 1e-6, 50)
+    state = trial_22.sample(t)
+    assert np.all(state["grf_n"] == 0)
+    from hop_impedance.simulation.dynamics import body_com
+
+    z = np.array([body_com(trial_22.chain, g)[1] for g in state["g"]])
+    acc = np.polyfit(t, z, 2)[0] * 2
+    assert acc == pytest.approx(-9.81, rel=1e-6)
+    # Continuity of the toe at take-off and touchdown (no jumps in the markers).
+    t_to, t_td = fl.t_start_s, fl.t_start_s + fl.duration_s
+    eps = 1e-7
+    a, b = trial_22.sample(np.array([t_to - eps, t_to + eps, t_td - eps, t_td + eps]))["g"].reshape(2, 2, 6)
+    assert np.abs(a[0] - a[1]).max() < 1e-5 and np.abs(b[0] - b[1]).max() < 1e-5
+
+
+def test_same_seed_same_trial_and_no_variability_means_identical_hops():
+    chain, cfg = hopping_config(2.2, "hard", 3, variability=False)
+    tr = simulate_hopping(chain, cfg, seed=5)
+    d = [s.stance.duration_s for s in tr.stances]
+    assert max(d) - min(d) < 2e-3
+
+
+def test_without_push_off_the_lossy_hops_decay():
+    chain, cfg = hopping_config(2.2, "hard", 3, Effects(push_off=False), variability=False)
+    tr = simulate_hopping(chain, cfg, seed=1)
+    speeds = [-s.touchdown.gd[1] for s in tr.stances]  # toe z speed at touchdown ~ COM speed
+    assert len(speeds) >= 2
+    assert speeds[1] < 0.95 * speeds[0]
+
+
+def test_unexpected_hard_surface_lowers_leg_stiffness_as_in_seed_001():
+    """Same time-based activation, same touchdown: leg stiffness lower on unexpected hard than on expected soft."""
+    chain, cfg = hopping_config(2.2, "soft", 1, Effects(time_activation=True), variability=False)
+    q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
+    cal = calibrate(chain, cfg, q)
+    assert cal["success"]
+    law = scale_push_off(cfg.law, cal["push_scale"])
+    td = touchdown_state(chain, q, np.array([0.0, -cal["speed_m_s"]]), 0.0)
+    soft = leg_stiffness_n_m(chain, simulate_stance(chain, law, SOFT, td))
+    hard = leg_stiffness_n_m(chain, simulate_stance(chain, law, HARD, td))
+    assert hard[0] < 0.97 * soft[0]  # lower leg stiffness ...
+    assert hard[2] > soft[2]  # ... from larger leg compression
+    assert hard[1] > soft[1]  # while the peak force is higher (seed 001, Fig. 4A)
+
+
+def test_sensor_geometry_cop_and_effects(trial_22):
+    rng = np.random.default_rng(0)
+    subject = __import__("hop_impedance.simulation.scenarios", fromlist=["SEED_SUBJECT"]).SEED_SUBJECT
+    clean, _ = sample_recording(trial_22, noise_free(SensorConfig()), subject, rng)
+    # Segment lengths from noise-free markers are constant and equal the model's.
+    pos = clean.markers.positions_m
+    knee_hip = np.linalg.norm(pos[:, 4] - pos[:, 3], axis=1)
+    assert np.ptp(knee_hip) < 1e-9
+    assert knee_hip[0] == pytest.approx(trial_22.chain.length_m[2])
+    assert np.all(pos[:, :, 1] == -0.1)
+    # COP on the force's line of action: x_toe - z_toe Fx / Fz.
+    fz = clean.force.force_n[:, 2]
+    stance = fz > 200
+    state = trial_22.sample((clean.force.stamp_ns - clean.start_ns) * 1e-9)
+    g, f = state["g"][stance], clean.force.force_n[stance]
+    expected = g[:, 0] - g[:, 1] * f[:, 0] / f[:, 2]
+    assert np.abs(clean.force.cop_x_m()[stance] - expected).max() < 1e-9
+    # Noise, offset, occlusions and stream delay.
+    cfg = SensorConfig(force_noise_n=3.0, force_offset_n=25.0, marker_noise_m=0.002, occlusions_per_s=4.0,
+                       marker_time_offset_s=0.02)
+    noisy, st = sample_recording(trial_22, cfg, subject, np.random.default_rng(1))
+    flight = clean.force.force_n[:, 2] == 0
+    assert np.mean(noisy.force.force_n[flight, 2]) == pytest.approx(25.0, abs=0.3)
+    assert np.std(noisy.force.force_n[flight, 0]) == pytest.approx(3.0, rel=0.1)
+    nan_rows = np.isnan(noisy.markers.positions_m).any(axis=(1, 2))
+    assert nan_rows.any() and len(st["occlusions"]) > 0
+    delayed = noisy.markers.positions_m[~nan_rows] - clean.markers.positions_m[~nan_rows]
+    assert np.nanstd(delayed[:, 2, 1]) == pytest.approx(0.002, rel=0.15)  # y has only the noise
+    shifted = trial_22.sample(np.clip((clean.markers.stamp_ns - clean.start_ns) * 1e-9 - 0.02, 0, None))["g"][:, 0:2]
+    resid = noisy.markers.positions_m[~nan_rows, 0, ::2] - shifted[~nan_rows]
+    assert np.abs(resid).max() < 0.002 * 6  # toe marker = delayed toe + noise
+
+
+def test_truth_events_match_force_plate_and_joint_samples(clean_recording):
+    rec, truth = clean_recording
+    fz = rec.force.force_n[:, 2]
+    t = (rec.force.stamp_ns - rec.start_ns) * 1e-9
+    on = np.nonzero((fz[1:] > 0) & (fz[:-1] <= 0))[0] + 1
+    assert len(on) == len(truth["stances"])
+    for k, s in zip(on, truth["stances"]):
+        assert t[k] - s["touchdown_s"] == pytest.approx(0.0, abs=1.01e-3)
+        assert s["touchdown_stamp_ns"] == rec.start_ns + round(s["touchdown_s"] * 1e9)
+        m = np.array(s["samples"]["moments_nm"])
+        parts = np.array(s["samples"]["eq3_moments_nm"]) + np.array(s["samples"]["push_off_moments_nm"])
+        assert np.abs(m - parts).max() < 1e-3
+        assert set(s["impedance"]) == {"ankle", "knee", "hip"}
+        assert s["impedance"]["ankle"]["k0"] == pytest.approx(301.4)
+        assert 2.5 < s["peak_grf_bw"] < 5.0
+    assert truth["effects"]["push_off"] is True
+
+
+def test_command_line_writes_small_recording_and_truth(tmp_path):
+    from hop_impedance.cli.main import main
+
+    out = tmp_path / "sim.mcap"
+    code = main(["simulate", "--freq", "2.2", "--hops", "2", "--seed", "3", "--out", str(out), "--no-damping",
+                 "--force-offset", "10"])
+    assert code == 0
+    truth = load_truth(truth_path(out))
+    assert truth["effects"]["damping"] is False and truth["sensors"]["force_offset_n"] == 10.0
+    assert out.stat().st_size < 2e6 and truth_path(out).stat().st_size < 2e6
+    io = pytest.importorskip("hop_impedance.io.recording_io")
+    loaded = io.load_recording(out)
+    assert loaded.markers.names == MARKER_NAMES
+    assert len(loaded.force) == truth["sensors"]["n_force_samples"]
+    assert main(["simulate", "--out", str(tmp_path / "x.mcap"), "--hops", "0"]) == 2
+
+
+def test_round_trip_inverse_dynamics_recovers_true_moments(clean_recording):
+    """Noise-free recording -> analyze_recording: RMS error of ID vs truth within 2 % of each joint's peak.
+
+    Cut-off 20 Hz (noise-free data; the default 12 Hz is for noisy data). The
+    hip, whose moment depends most on segment accelerations at the force jump
+    of touchdown, is allowed 3 %.
+    """
+    analysis = pytest.importorskip("hop_impedance.biomech.analysis")
+    rec, truth = clean_recording
+    result = analysis.analyze_recording(rec, analysis.AnalysisOptions(marker_cutoff_hz=20.0, force_cutoff_hz=20.0))
+    good = [s for s in result.stances if s.rejection_reason is None]
+    assert len(good) == len(truth["stances"])
+    for s, ts in zip(good, truth["stances"]):
+        tt = np.array(ts["samples"]["t_s"])
+        true = np.array(ts["samples"]["moments_nm"])
+        est = np.stack([np.interp(tt, s.touchdown_s + s.joints.time_s, s.joints.moment_nm[:, j],
+                                  left=np.nan, right=np.nan) for j in range(3)], 1)
+        ok = np.isfinite(est).all(axis=1)
+        assert ok.mean() > 0.95
+        rms = np.sqrt(np.mean((est[ok] - true[ok]) ** 2, axis=0))
+        peak = np.abs(true).max(axis=0)
+        assert np.all(rms / peak < [0.02, 0.02, 0.03]), rms / peak
