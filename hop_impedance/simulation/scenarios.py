@@ -33,7 +33,7 @@ SEED_TABLE2: dict[float, dict[str, tuple[float, float, float]]] = {
 
 #: Default touchdown joint angles (rad): ankle (sole-shank, 90 deg neutral,
 #: plantarflexed below), knee and hip (pi + flexion).
-DEFAULT_TOUCHDOWN_RHO = (1.25, np.pi + 0.45, np.pi + 0.20)
+DEFAULT_TOUCHDOWN_RHO = (1.45, np.pi + 0.50, np.pi + 0.20)
 
 #: Illustrative magnitudes of effects the seed found insignificant.
 DAMPING_B0 = 0.5  # N m s/rad, seed: "below 0.72"
