@@ -38,7 +38,7 @@ DEFAULT_TOUCHDOWN_RHO = (1.45, np.pi + 0.50, np.pi + 0.20)
 #: Illustrative magnitudes of effects the seed found insignificant.
 DAMPING_B0 = 0.5  # N m s/rad, seed: "below 0.72"
 EXTRA_K2 = (200.0, 200.0, 100.0)  # N m/rad^3
-EXTRA_K3 = (20.0, 10.0, 5.0)  # N m s/rad^2
+EXTRA_K3 = (3.0, 2.0, 1.0)  # N m s/rad^2 (larger values make the light foot whip: S grows as int omega^2)
 EXTRA_B1 = (0.05, 0.05, 0.02)  # N m s^2/rad^2
 #: Push-off shape over the joints (ankle-dominated) and default base amplitude (N m).
 PUSH_OFF_WEIGHTS = (1.0, 0.6, 0.3)
