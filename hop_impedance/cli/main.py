@@ -15,6 +15,7 @@ import sys
 
 # Order shown in --help.
 COMMAND_MODULES: tuple[str, ...] = (
+    "demo",
     "analyze",
     "simulate",
     "discover",

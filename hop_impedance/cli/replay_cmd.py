@@ -1,0 +1,47 @@
+"""``hop-impedance replay REC.mcap``: publish a recording onto its ROS 2 topics."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "replay",
+        help="play a recording onto the contract topics (ROS 2)",
+        description="Publish an MCAP recording's /force_plate/wrench, /mocap/markers and /subject with the "
+        "recorded timing. DDS discovery stays on this machine unless ROS_AUTOMATIC_DISCOVERY_RANGE says otherwise.",
+    )
+    p.add_argument("recording", help="MCAP file or rosbag2 folder")
+    p.add_argument("--rate", type=float, default=1.0, help="speed factor (1 = real time; 0 = as fast as subscribers take it without loss) [1]")
+    p.add_argument("--loop", action="store_true", help="restart at the end (stamps keep increasing)")
+    p.add_argument("--wait", type=float, default=5.0, help="seconds to wait for subscribers before playing [5]")
+    p.add_argument("--best-effort", action="store_true", help="publish sensor topics best-effort (as live drivers do)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    import rclpy
+    from rclpy.parameter import Parameter
+
+    from hop_impedance.nodes.replay import ReplayNode
+
+    params = [
+        Parameter("recording", value=str(args.recording)),
+        Parameter("rate", value=float(args.rate)),
+        Parameter("loop", value=bool(args.loop)),
+        Parameter("wait_for_subscribers_s", value=float(args.wait)),
+        Parameter("reliable", value=not args.best_effort),
+    ]
+    with rclpy.init():
+        node = ReplayNode(parameter_overrides=params)
+        try:
+            while rclpy.ok() and not node.finished.is_set():
+                rclpy.spin_once(node, timeout_sec=0.1)
+        except KeyboardInterrupt:
+            node.stop()
+        for topic, n in node.published.items():
+            print(f"{topic}: {n} messages published")
+        if node.error:
+            raise ValueError(node.error)
+    return 0

@@ -1,0 +1,208 @@
+"""``replay``: play an MCAP recording onto its topics with the recorded timing.
+
+Parameters
+----------
+recording : str
+    Path of the ``.mcap`` file (or rosbag2 folder).
+rate : float
+    Playback speed factor: 1.0 real time, 10.0 ten times faster, 0.0 as fast
+    as the subscribers take it without loss (reliable QoS; the node waits for
+    every message to be acknowledged in blocks of ``block_size``).
+loop : bool
+    Start again at the end; header stamps of later passes are shifted by the
+    recording's length so time keeps increasing downstream.
+topics : list of str
+    Topics to play (default: the contract's three inputs).
+wait_for_subscribers_s : float
+    Before starting, wait up to this long until every played topic has a
+    subscriber (so nothing published before discovery is lost).
+reliable : bool
+    Publish sensor topics reliably (default true: a replay should not lose data).
+
+Messages are published as the CDR bytes stored in the file (no decode /
+re-encode) except on loop passes after the first. ``/subject`` is published
+with transient-local durability, as the contract asks.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import rclpy
+from rclpy.duration import Duration
+from rclpy.node import Node
+from rclpy.serialization import deserialize_message, serialize_message
+
+from hop_impedance.io.mcap_io import MessageStream, RecordingError
+from hop_impedance.nodes.message_types import message_class
+from hop_impedance.nodes.qos import input_qos, latched_qos
+from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
+
+DEFAULT_TOPICS = [FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC]
+
+
+def _raw_messages(path: str, topics: list[str]):
+    """(topic, schema name, log time ns, CDR bytes) in log-time order, without decoding."""
+    from mcap.reader import make_reader
+
+    from hop_impedance.io.mcap_io import _check_file
+
+    p = _check_file(path)
+    with open(p, "rb") as fh:
+        reader = make_reader(fh)
+        try:
+            for schema, channel, message in reader.iter_messages(topics=topics, log_time_order=True):
+                yield channel.topic, schema.name, message.log_time, message.data
+        except Exception as exc:  # truncated file: stop where the data stops  # noqa: BLE001
+            raise RecordingError(f"{p}: reading stopped early ({type(exc).__name__}: {exc})") from None
+
+
+class ReplayNode(Node):
+    """Publishes a recording's messages; see the module docstring for parameters."""
+
+    def __init__(self, **kwargs):
+        super().__init__("replay", **kwargs)
+        self.declare_parameter("recording", "", _desc("MCAP file or rosbag2 folder to play"))
+        self.declare_parameter("rate", 1.0, _desc("speed factor; 0 = as fast as subscribers take it without loss"))
+        self.declare_parameter("loop", False, _desc("restart at the end, shifting stamps forward"))
+        self.declare_parameter("topics", DEFAULT_TOPICS, _desc("topics to play"))
+        self.declare_parameter("wait_for_subscribers_s", 5.0, _desc("wait this long for subscribers before playing"))
+        self.declare_parameter("reliable", True, _desc("publish sensor topics with reliable QoS"))
+        self.declare_parameter("block_size", 200, _desc("with rate 0: wait for acknowledgement every N messages"))
+        self.path = self.get_parameter("recording").value
+        if not self.path:
+            raise ValueError("replay: parameter 'recording' is required")
+        self.rate = float(self.get_parameter("rate").value)
+        if self.rate < 0:
+            raise ValueError(f"replay: rate must be >= 0, got {self.rate}")
+        self.topics = list(self.get_parameter("topics").value)
+        self.reliable = bool(self.get_parameter("reliable").value)
+        self.published = {t: 0 for t in self.topics}
+        self.finished = threading.Event()
+        self.error: str | None = None
+        self._pubs: dict[str, rclpy.publisher.Publisher] = {}
+        self._types: dict[str, type] = {}
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="replay", daemon=True)
+        self._thread.start()
+
+    def _publisher(self, topic: str, schema: str):
+        pub = self._pubs.get(topic)
+        if pub is None:
+            cls = message_class(schema)
+            qos = latched_qos() if topic == SUBJECT_TOPIC else input_qos(self.reliable)
+            pub = self.create_publisher(cls, topic, qos)
+            self._pubs[topic] = pub
+            self._types[topic] = cls
+        return pub
+
+    def _wait_for_subscribers(self) -> None:
+        timeout = float(self.get_parameter("wait_for_subscribers_s").value)
+        # Create every publisher up front so discovery can happen while we wait.
+        for topic, schema, _, _ in _first_per_topic(self.path, self.topics):
+            self._publisher(topic, schema)
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not self._stop.is_set():
+            if all(p.get_subscription_count() > 0 for t, p in self._pubs.items() if t != SUBJECT_TOPIC):
+                time.sleep(0.2)  # let the matched readers finish their handshake
+                return
+            time.sleep(0.02)
+
+    def _run(self) -> None:
+        try:
+            self._wait_for_subscribers()
+            loop = bool(self.get_parameter("loop").value)
+            shift = 0
+            while not self._stop.is_set():
+                span = self._play_once(shift)
+                if not loop or span <= 0:
+                    break
+                shift += span
+            self._drain()
+        except (RecordingError, ValueError) as exc:
+            self.error = str(exc)
+            self.get_logger().error(self.error)
+        except Exception as exc:  # an unexpected failure must still end the replay visibly  # noqa: BLE001
+            self.error = f"replay failed: {type(exc).__name__}: {exc}"
+            self.get_logger().error(self.error)
+        finally:
+            self.finished.set()
+
+    def _play_once(self, shift_ns: int) -> int:
+        """Publish the file once; returns its span in ns (for loop shifts)."""
+        block = int(self.get_parameter("block_size").value)
+        wall0 = time.monotonic()
+        first = last = None
+        n = 0
+        for topic, schema, log_ns, data in _raw_messages(self.path, self.topics):
+            if self._stop.is_set():
+                break
+            if first is None:
+                first = log_ns
+            last = log_ns
+            if topic == SUBJECT_TOPIC and shift_ns:
+                continue  # latched once is enough
+            pub = self._publisher(topic, schema)
+            if self.rate > 0:
+                due = wall0 + (log_ns - first) * 1e-9 / self.rate
+                delay = due - time.monotonic()
+                if delay > 0:
+                    time.sleep(delay)
+            pub.publish(data if not shift_ns else self._shifted(topic, data, shift_ns))
+            self.published[topic] += 1
+            n += 1
+            if self.rate == 0 and n % block == 0:
+                self._drain()
+        return 0 if first is None else (last - first) + 1_000_000
+
+    def _shifted(self, topic: str, data: bytes, shift_ns: int) -> bytes:
+        msg = deserialize_message(data, self._types[topic])
+        total = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec + shift_ns
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(total, 1_000_000_000)
+        return serialize_message(msg)
+
+    def _drain(self) -> None:
+        for topic, pub in self._pubs.items():
+            if topic != SUBJECT_TOPIC:
+                pub.wait_for_all_acked(Duration(seconds=5.0))
+
+    def stop(self) -> None:
+        """Ask the playback thread to stop (returns at once)."""
+        self._stop.set()
+
+
+def _first_per_topic(path: str, topics: list[str]):
+    """The first message of each topic (for creating publishers before playing)."""
+    seen = set()
+    for topic, schema, log_ns, data in _raw_messages(path, topics):
+        if topic not in seen:
+            seen.add(topic)
+            yield topic, schema, log_ns, data
+            if len(seen) == len(topics):
+                return
+
+
+def _desc(text: str):
+    from rcl_interfaces.msg import ParameterDescriptor
+
+    return ParameterDescriptor(description=text)
+
+
+def main(args=None) -> None:
+    """Run the replay node until the recording has been played (or Ctrl-C)."""
+    from rclpy.executors import ExternalShutdownException
+
+    with rclpy.init(args=args):
+        try:
+            node = ReplayNode()
+            while rclpy.ok() and not node.finished.is_set():
+                rclpy.spin_once(node, timeout_sec=0.1)
+            for topic, n in node.published.items():
+                node.get_logger().info(f"{topic}: {n} messages")
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+
+
+if __name__ == "__main__":
+    main()
