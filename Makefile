@@ -6,7 +6,7 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 
 VENV ?= .venv
 PY := $(VENV)/bin/python
-DEMO_RECORDING ?= recordings/hop_2p20hz_hard.mcap
+DEMO_RECORDING ?= recordings/sim_2p20hz_hard.mcap
 DEMO_OUT ?= demo_out
 
 .PHONY: setup demo test bench screenshot recordings clean help

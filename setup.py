@@ -10,7 +10,7 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=find_packages(include=[PACKAGE, f"{PACKAGE}.*"]),
-    package_data={PACKAGE: ["py.typed", "data/*.yaml"]},
+    package_data={PACKAGE: ["py.typed", "data/*.yaml", "data/marker_maps/*.yaml"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
@@ -26,6 +26,8 @@ setup(
         "mcap-ros2-support>=0.5",
         "pyyaml>=6",
         "matplotlib>=3.7",
+        # C3D import (hop-impedance import): a maintained reader/writer, not hand-parsed binary.
+        "ezc3d>=1.7",
     ],
     extras_require={"viz": ["rerun-sdk>=0.41"]},
     zip_safe=True,
