@@ -145,7 +145,12 @@ class StanceResult:
 
 @dataclass
 class RecordingAnalysis:
-    """Result of :func:`analyze_recording`."""
+    """Result of :func:`analyze_recording`.
+
+    ``options`` are the settings the analysis ran with (hook for the impedance
+    fit, :mod:`hop_impedance.impedance.recording_fits`, which needs the
+    low-pass cut-off as the noise bandwidth); None when built elsewhere.
+    """
 
     subject: Subject
     model: BodyModel | None
@@ -153,6 +158,7 @@ class RecordingAnalysis:
     recording: dict
     stances: list[StanceResult]
     warnings: list[str] = field(default_factory=list)
+    options: AnalysisOptions | None = None
 
 
 @dataclass
@@ -324,7 +330,7 @@ def analyze_recording(rec: Recording, options: AnalysisOptions | None = None) ->
     if model is None and data.markers_xz is not None:
         model = body_model_from_markers(rec.subject, rec.markers, options.overrides)
     results = analyze_span(data, stances, list(range(len(stances))), model, rec.subject.body_mass_kg, options)
-    return RecordingAnalysis(rec.subject, model, rec.start_ns, recording_info(rec), results, list(rec.warnings))
+    return RecordingAnalysis(rec.subject, model, rec.start_ns, recording_info(rec), results, list(rec.warnings), options)
 
 
 def recording_info(rec: Recording) -> dict:
