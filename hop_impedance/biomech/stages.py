@@ -23,6 +23,28 @@ Agreement with the batch analysis
   stance is emitted by :meth:`StanceAnalysisStage.flush`, with a window
   reaching the end of the data (so its trailing flight's offset is the
   batch one).
+
+Low-latency mode (``post_pad_s`` given)
+---------------------------------------
+The window ends ``post_pad_s`` after take-off instead of at the next
+touchdown, so a stance is emitted as soon as the take-off is confirmed (the
+detector needs ``min_flight_s`` = 50 ms of flight) and the data reach
+``takeoff + post_pad_s`` (plus one marker frame). Differences from batch,
+all at the end of the stance: the plate offset of the following flight is
+the mean of its first ``post_pad_s - flight_margin_s`` only, and the
+zero-lag filters and splines see the window edge ``post_pad_s`` after
+take-off (filter time constant ~13 ms at 12 Hz). The test
+``test/ros/test_stages_low_latency.py`` measures the difference on the
+bundled recordings (figures in docs/pipeline.md).
+
+Message loss
+------------
+A stance whose window has a hole in the force samples (a step longer than
+1.5 force periods, i.e. at least one sample lost) or in the marker frames
+(a step longer than ``max_gap_s`` + one frame) is still emitted with its
+force-based figures, but its joint data are dropped and the rejection
+reason names the number of missing samples; it is never silently analysed
+on incomplete data.
 """
 
 from __future__ import annotations
@@ -69,9 +91,21 @@ class StanceAnalysisStage:
         None for force-only streams.
     body_mass_kg : float
     options : AnalysisOptions, optional
+    post_pad_s : float or None
+        None (default) gives batch-identical results (window up to the next
+        touchdown); a value selects the low-latency mode (module docstring).
     """
 
-    def __init__(self, model: BodyModel | None, body_mass_kg: float, options: AnalysisOptions | None = None) -> None:
+    def __init__(
+        self,
+        model: BodyModel | None,
+        body_mass_kg: float,
+        options: AnalysisOptions | None = None,
+        post_pad_s: float | None = None,
+    ) -> None:
+        if post_pad_s is not None and not post_pad_s > 0:
+            raise ValueError(f"post_pad_s must be > 0 s (or None for batch mode), got {post_pad_s}")
+        self.post_pad_s = post_pad_s
         self.model = model
         self.body_mass_kg = float(body_mass_kg)
         self.options = options or AnalysisOptions()
@@ -129,6 +163,8 @@ class StanceAnalysisStage:
         start = s.touchdown_s - pad
         if k > 0:
             start = min(start, stances[k - 1].takeoff_s)
+        if self.post_pad_s is not None:
+            return start, s.takeoff_s + self.post_pad_s
         end = s.takeoff_s + pad
         if k + 1 < len(stances):
             end = max(end, stances[k + 1].touchdown_s)
@@ -145,13 +181,24 @@ class StanceAnalysisStage:
             start, end = self._window(stances, k)
             if not final and not self._data_reach(end):
                 break
-            if final and k + 1 >= len(stances):
+            if final and k + 1 >= len(stances) and self.post_pad_s is None:
                 end = np.inf  # the last flight runs to the end of the data, as in batch
             data = self._span(start, end)
-            out.extend(analyze_span(data, stances, [k], self.model, self.body_mass_kg, self.options))
+            result = analyze_span(data, stances, [k], self.model, self.body_mass_kg, self.options)[0]
+            out.append(self._reject_on_loss(result, data))
             self._next += 1
         self._trim(stances)
         return out
+
+    def _reject_on_loss(self, result: StanceResult, data: SpanData) -> StanceResult:
+        """Drop the joint data of a stance whose samples have holes (see Message loss)."""
+        if result.rejection_reason is not None:
+            return result
+        reason = missing_samples_reason(data, result.touchdown_s, result.takeoff_s, self.options.max_gap_s)
+        if reason is not None:
+            result.rejection_reason = reason
+            result.joints = None
+        return result
 
     def _data_reach(self, end_s: float) -> bool:
         force_ok = self._force_t[-1][-1] >= end_s
@@ -188,3 +235,89 @@ class StanceAnalysisStage:
                 sel = t >= keep_from
                 ts[:] = [t[sel]]
                 vs[:] = [v[sel]]
+
+
+def missing_samples_reason(data: SpanData, touchdown_s: float, takeoff_s: float, max_gap_s: float) -> str | None:
+    """Why a stance's data have holes from lost messages, or None.
+
+    Parameters
+    ----------
+    data : SpanData
+        The stance's window (force times (N,) s; marker times (M,) s or None).
+    touchdown_s, takeoff_s : float
+        Stance events (s, same clock).
+    max_gap_s : float
+        Longest marker-frame gap the kinematics bridges (s).
+
+    Returns
+    -------
+    str or None
+        Names the stream and the number of missing samples, e.g.
+        ``"3 force samples lost in stance (message loss)"``.
+
+    Notes
+    -----
+    Force: steps longer than 1.5 x the median sampling period inside
+    ``[touchdown, take-off]``; each counts ``round(step / period) - 1``
+    samples. Markers: steps longer than ``max_gap_s`` + one frame period in
+    the same interval extended by one frame on each side.
+    """
+    reason = _hole_reason(data.force_t_s, touchdown_s, takeoff_s, 1.5, 0.0, "force")
+    if reason is None and data.marker_t_s is not None and len(data.marker_t_s) > 2:
+        dt = float(np.median(np.diff(data.marker_t_s)))
+        reason = _hole_reason(data.marker_t_s, touchdown_s - dt, takeoff_s + dt, 1.0, max_gap_s, "marker")
+    return reason
+
+
+def _hole_reason(t: np.ndarray, t0: float, t1: float, factor: float, extra_s: float, name: str) -> str | None:
+    if t.size < 3:
+        return None
+    period = float(np.median(np.diff(t)))
+    inside = t[(t >= t0 - period) & (t <= t1 + period)]
+    steps = np.diff(inside)
+    holes = steps[steps > factor * period + extra_s]
+    if inside.size == 0 or inside[0] > t0 + period or inside[-1] < t1 - period:
+        return f"{name} samples missing at the stance edge (message loss)"
+    if holes.size == 0:
+        return None
+    lost = int(np.sum(np.round(holes / period) - 1))
+    return f"{max(lost, 1)} {name} samples lost in stance (message loss)"
+
+
+def equivalent_linear_impedance(
+    angle_rad: np.ndarray, angular_velocity_rad_s: np.ndarray, moment_nm: np.ndarray
+) -> tuple[float, float, float]:
+    """Linear impedance ``tau = k (rho - theta_eq) + b omega`` fitted to one joint's stance.
+
+    The law finite-state impedance controllers of prostheses use (one
+    stiffness, damping and equilibrium angle per phase).
+
+    Parameters
+    ----------
+    angle_rad : ndarray, shape (n,)
+        Joint angle rho (rad, increases with flexion).
+    angular_velocity_rad_s : ndarray, shape (n,)
+        d(rho)/dt (rad/s).
+    moment_nm : ndarray, shape (n,)
+        Net joint moment (N m, extensor positive, both legs lumped).
+
+    Returns
+    -------
+    stiffness_nm_per_rad, damping_nms_per_rad, equilibrium_angle_rad : float
+        Ordinary least squares (``scipy.linalg.lstsq``) of ``tau`` on
+        ``[rho, omega, 1]``; ``theta_eq = -intercept / k``. NaN when fewer
+        than 3 finite samples or a singular design (flat angle).
+    """
+    from scipy.linalg import lstsq
+
+    rho, omega, tau = (np.asarray(a, float) for a in (angle_rad, angular_velocity_rad_s, moment_nm))
+    ok = np.isfinite(rho) & np.isfinite(omega) & np.isfinite(tau)
+    nan3 = (float("nan"),) * 3
+    if np.count_nonzero(ok) < 3 or np.ptp(rho[ok]) <= 0:
+        return nan3
+    design = np.column_stack([rho[ok], omega[ok], np.ones(np.count_nonzero(ok))])
+    coef, _, rank, _ = lstsq(design, tau[ok])
+    if rank < 3 or coef[0] == 0:
+        return nan3
+    k, b, c = (float(v) for v in coef)
+    return k, b, -c / k
