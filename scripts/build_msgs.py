@@ -68,8 +68,17 @@ def fix_wheel_cmake_paths(prefix: Path) -> int:
 
 
 def run(cmd: list[str], env: dict[str, str]) -> None:
-    print("+", " ".join(cmd), flush=True)
-    subprocess.run(cmd, check=True, env=env, cwd=ROOT)
+    """Run a build step; its output goes to build/hop_impedance_msgs/build.log, shown on failure."""
+    log = BUILD_DIR / "build.log"
+    log.parent.mkdir(parents=True, exist_ok=True)
+    with open(log, "a", encoding="utf-8") as fh:
+        fh.write("+ " + " ".join(cmd) + "\n")
+        fh.flush()
+        proc = subprocess.run(cmd, env=env, cwd=ROOT, stdout=fh, stderr=subprocess.STDOUT)
+    if proc.returncode != 0:
+        tail = log.read_text(encoding="utf-8", errors="replace").splitlines()[-40:]
+        print("\n".join(tail), file=sys.stderr)
+        raise SystemExit(f"build_msgs: '{cmd[0]} {cmd[1]}' failed (exit {proc.returncode}); full log: {log}")
 
 
 def build(prefix: Path) -> None:
@@ -108,6 +117,7 @@ def main() -> int:
     n = fix_wheel_cmake_paths(prefix)
     if n:
         print(f"build_msgs: fixed wheel include paths in {n} cmake file(s)")
+    print("hop_impedance_msgs: generating and compiling (cmake + g++, about 20-60 s) ...", flush=True)
     build(prefix)
     stamp.write_text(digest)
     print("hop_impedance_msgs: built and installed into", prefix)

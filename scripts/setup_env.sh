@@ -17,9 +17,32 @@ need() { # need NAME FILES... : true if the stamp for NAME is older than any of 
 }
 done_() { mkdir -p "$STAMPS"; touch "$STAMPS/$1"; }
 
+# Toolchain for compiling the message package: g++ and cmake. On a bare Debian
+# machine (as root) install them from Debian; otherwise say what is missing.
+missing=""
+command -v g++ >/dev/null 2>&1 || missing="$missing g++"
+command -v cmake >/dev/null 2>&1 || missing="$missing cmake"
+command -v make >/dev/null 2>&1 || missing="$missing make"
+if [ -n "$missing" ]; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "setup: installing$missing from Debian"
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $missing >/dev/null
+  else
+    echo "setup: please install$missing (e.g. sudo apt-get install$missing) and run again" >&2
+    exit 1
+  fi
+fi
+if ! "$PYTHON" -c 'import sys; sys.exit(sys.version_info < (3, 10))' 2>/dev/null; then
+  echo "setup: need Python >= 3.10 as '$PYTHON' (the ROS 2 wheels exist for CPython 3.10-3.14); set PYTHON=..." >&2
+  exit 1
+fi
+
 if [ ! -x "$VENV/bin/python" ]; then
   echo "setup: creating $VENV with $($PYTHON --version 2>&1)"
-  "$PYTHON" -m venv "$VENV"
+  if ! "$PYTHON" -m venv "$VENV"; then
+    echo "setup: '$PYTHON -m venv' failed; on Debian install python3-venv (apt-get install python3-venv)" >&2
+    rm -rf "$VENV"; exit 1
+  fi
   "$VENV/bin/python" -m pip install --quiet --upgrade pip setuptools wheel
 fi
 PIP="$VENV/bin/python -m pip install --quiet --disable-pip-version-check"
