@@ -1,4 +1,7 @@
-"""``hop-impedance analyze REC.mcap --json OUT.json``: stances and per-stance inverse dynamics.
+"""``hop-impedance analyze REC.mcap --json OUT.json``: stances, inverse dynamics and impedance fits.
+
+Every analysed stance's joint objects carry a ``fit`` object
+(:func:`hop_impedance.impedance.stance_fit.fit_to_json`) unless ``--no-fit``.
 
 The JSON schema is documented in docs/analyze_json.md.
 """
@@ -23,6 +26,7 @@ def register(subparsers) -> None:
     p.add_argument("--segments", metavar="YAML", help="per-segment overrides of the body model")
     p.add_argument("--cutoff-hz", type=float, default=12.0, help="low-pass cut-off for markers and forces (Hz, default 12)")
     p.add_argument("--max-gap-s", type=float, default=0.05, help="longest marker gap filled (s, default 0.05)")
+    p.add_argument("--no-fit", action="store_true", help="skip the per-stance impedance fits (no 'fit' objects)")
     p.add_argument("--indent", type=int, default=None, help="pretty-print the JSON with this indent")
     p.set_defaults(func=run)
 
@@ -47,6 +51,34 @@ def _subject(rec, args):
     return replace(subj, **changes) if changes else subj
 
 
+def add_fits_to_json(doc: dict, analysis) -> list[dict]:
+    """Fit every stance of ``analysis`` and put each joint's ``fit`` object into ``doc``.
+
+    Parameters
+    ----------
+    doc : dict
+        ``analysis_to_json(analysis)``; changed in place: ``stances[i].joints[joint].fit``
+        for stances with joint data (rejected stances have ``joints: null``
+        and no fit; their reason is the stance's ``rejection_reason``).
+    analysis : RecordingAnalysis
+
+    Returns
+    -------
+    list of dict
+        The fits, one ``{joint: JointImpedanceFit}`` per stance.
+    """
+    from hop_impedance.impedance.recording_fits import fit_recording
+    from hop_impedance.impedance.stance_fit import fit_to_json
+
+    fits = fit_recording(analysis)
+    for stance, stance_fits in zip(doc["stances"], fits):
+        if stance["joints"] is None:
+            continue
+        for name, fit in stance_fits.items():
+            stance["joints"][name]["fit"] = fit_to_json(fit)
+    return fits
+
+
 def run(args: argparse.Namespace) -> int:
     """Load, analyse, write the JSON; print a one-line summary on stderr."""
     import json
@@ -65,7 +97,10 @@ def run(args: argparse.Namespace) -> int:
         max_gap_s=args.max_gap_s,
         overrides=load_overrides(args.segments) if args.segments else None,
     )
-    doc = analysis_to_json(analyze_recording(rec, options))
+    analysis = analyze_recording(rec, options)
+    doc = analysis_to_json(analysis)
+    if not args.no_fit:
+        add_fits_to_json(doc, analysis)
     text = json.dumps(doc, indent=args.indent, allow_nan=False)
     if args.json == "-":
         sys.stdout.write(text + "\n")
@@ -74,5 +109,7 @@ def run(args: argparse.Namespace) -> int:
             fh.write(text + "\n")
     n = len(doc["stances"])
     ok = sum(1 for s in doc["stances"] if s["joints"] is not None)
-    print(f"hop-impedance analyze: {n} stances, {ok} with inverse dynamics -> {args.json}", file=sys.stderr)
+    fitted = sum(1 for s in doc["stances"] for j in (s["joints"] or {}).values() if (j.get("fit") or {}).get("status") == "solved")
+    fits = "" if args.no_fit else f", {fitted} joint fits"
+    print(f"hop-impedance analyze: {n} stances, {ok} with inverse dynamics{fits} -> {args.json}", file=sys.stderr)
     return 0

@@ -95,6 +95,15 @@ class FitOptions:
     terms : tuple of str
         Starting model (default: all eight Eq. 3 terms); with ``reduce=False``
         exactly these terms are fitted (e.g. the reduced law k0, k1, b0).
+    exclude_touchdown_s, exclude_takeoff_s : float
+        Time (s) after touchdown / before take-off whose samples are left out
+        of the least-squares objective (Eq. 6), the F-tests and the fit
+        errors; the regressors are still built from touchdown (rho0, omega0,
+        k0 = K at touchdown) and the constraints (Eqs. 7-9) still hold at
+        every sample. Default 0 (the seed's whole stance). Choice for
+        recordings: zero-lag low-pass filtering smears the force step at
+        touchdown and take-off against the marker kinematics, which leaves a
+        moment artefact in the last ~10-20 ms (see ``recording_fits``).
     """
 
     alpha: float = 0.05
@@ -107,6 +116,8 @@ class FitOptions:
     min_angle_range_rad: float = 0.01
     osqp_eps: float = 1e-9
     terms: tuple[str, ...] = TERM_NAMES
+    exclude_touchdown_s: float = 0.0
+    exclude_takeoff_s: float = 0.0
 
 
 @dataclass
@@ -199,6 +210,12 @@ def validate_stance(
     duration = float(time_s[-1] - time_s[0])
     if duration < options.min_duration_s:
         return f"stance too short: {duration:.3f} s < {options.min_duration_s:.3f} s"
+    window = fit_window(time_s, options)
+    if np.count_nonzero(window) < options.min_samples:
+        return (
+            f"too few samples left after excluding {options.exclude_touchdown_s:.3f} s after touchdown and "
+            f"{options.exclude_takeoff_s:.3f} s before take-off: {np.count_nonzero(window)} < {options.min_samples}"
+        )
     angle_range = float(np.ptp(angle_rad))
     if angle_range < options.min_angle_range_rad:
         return (
@@ -206,6 +223,11 @@ def validate_stance(
             "stiffness regressors are singular"
         )
     return None
+
+
+def fit_window(time_s: np.ndarray, options: FitOptions) -> np.ndarray:
+    """Boolean mask, shape (N,), of the samples entering the objective (see ``FitOptions.exclude_*``)."""
+    return (time_s >= time_s[0] + options.exclude_touchdown_s) & (time_s <= time_s[-1] - options.exclude_takeoff_s)
 
 
 def _effective_samples(duration_s: float, n: int, options: FitOptions) -> float | None:
@@ -275,15 +297,17 @@ def fit_joint_stance(
         return _rejected(reason, time_s=t, angle_rad=rho, moment_nm=tau)
 
     regs = stance_regressors(t, rho, omega)
-    n = regs.n_samples
+    window = fit_window(t, options)
+    tw, tauw = t[window], tau[window]
+    n = int(np.count_nonzero(window))
     start = tuple(name for name in TERM_NAMES if name in options.terms)
-    full_columns = regs.moment_rows[:, parameter_indices(start)[1:]]
+    full_columns = regs.moment_rows[window][:, parameter_indices(start)[1:]]
     diagnostics = collinearity_diagnostics(full_columns, start)
-    n_eff_given = _effective_samples(float(t[-1] - t[0]), n, options)
+    n_eff_given = _effective_samples(float(tw[-1] - tw[0]), n, options)
     if options.reduce:
         reduction = reduce_model(
             full_columns,
-            tau,
+            tauw,
             terms=start,
             alpha=options.alpha,
             vif_limit=options.vif_limit,
@@ -307,9 +331,9 @@ def fit_joint_stance(
     )
 
     columns = parameter_indices(terms)
-    X = regs.moment_rows[:, columns]
+    X = regs.moment_rows[window][:, columns]
     A, _ = constraint_rows(regs, columns)
-    solution = solver.solve(X, tau, A)
+    solution = solver.solve(X, tauw, A)
     if not solution.converged:
         return _rejected(
             f"OSQP did not converge: status '{solution.status}'", status=solution.status, terms=terms, **common
@@ -325,14 +349,14 @@ def fit_joint_stance(
     p_values = 2.0 * special.stdtr(dof, -np.abs(t_stat)) if dof > 0 else np.full(len(names), np.nan)
 
     moment_fit = regs.moment_rows @ theta
-    residual = tau - moment_fit
+    residual = (tau - moment_fit)[window]
     sse = float(residual @ residual)
-    sst = float(np.sum((tau - tau.mean()) ** 2))
+    sst = float(np.sum((tauw - tauw.mean()) ** 2))
     stiffness = regs.stiffness_rows @ theta
     k_overall = overall_stiffness(rho, tau)
     moment_constant = constant_stiffness_moment(rho, tau, k_overall if math.isfinite(k_overall) else 0.0)
-    sse_constant = float(np.sum((tau - moment_constant) ** 2))
-    frame_rate = (n - 1) / float(t[-1] - t[0])
+    sse_constant = float(np.sum((tau - moment_constant)[window] ** 2))
+    frame_rate = (n - 1) / float(tw[-1] - tw[0])
     return JointImpedanceFit(
         status=solution.status,
         rejection_reason=None,
@@ -414,5 +438,6 @@ __all__ = [
     "JointImpedanceFit",
     "fit_joint_stance",
     "fit_to_json",
+    "fit_window",
     "validate_stance",
 ]
