@@ -150,9 +150,23 @@ class StanceAnalysisStage:
 
     # -- internals -------------------------------------------------------------
 
-    def _known_stances(self) -> list[Stance]:
-        """Finished stances plus, if in stance now, a provisional one (for neighbours' timing)."""
+    def _final_stances(self) -> list[Stance]:
+        """Stances whose take-off is confirmed.
+
+        The detector appends a stance to ``stances`` only at the next
+        touchdown (its trailing flight baseline is then known); in
+        low-latency mode the stance waiting for that (``pending_stance``)
+        counts as final from its confirmed take-off on.
+        """
         stances = list(self.detector.stances)
+        pending = pending_stance(self.detector)
+        if self.post_pad_s is not None and pending is not None:
+            stances.append(pending)
+        return stances
+
+    def _known_stances(self) -> list[Stance]:
+        """Final stances plus, if in stance now, a provisional one (for neighbours' timing)."""
+        stances = self._final_stances()
         if np.isfinite(self._last_touchdown_s) and (not stances or self._last_touchdown_s > stances[-1].takeoff_s):
             t_end = float(self._force_t[-1][-1]) if self._force_t else self._last_touchdown_s
             stances.append(Stance(self._last_touchdown_s, max(t_end, self._last_touchdown_s), False))
@@ -175,7 +189,7 @@ class StanceAnalysisStage:
         if not self._force_t:
             return out
         stances = self._known_stances()
-        n_final = len(self.detector.stances)
+        n_final = len(self._final_stances())
         while self._next < n_final:
             k = self._next
             start, end = self._window(stances, k)
@@ -235,6 +249,16 @@ class StanceAnalysisStage:
                 sel = t >= keep_from
                 ts[:] = [t[sel]]
                 vs[:] = [v[sel]]
+
+
+def pending_stance(detector: StanceDetector) -> Stance | None:
+    """The stance whose take-off is confirmed but not yet in ``detector.stances``, or None.
+
+    :class:`StanceDetector` keeps it aside until the next touchdown (to fill
+    ``baseline_after_n``); it has no public accessor yet, so this reads the
+    private attribute in one place.
+    """
+    return getattr(detector, "_pending_after", None)
 
 
 def missing_samples_reason(data: SpanData, touchdown_s: float, takeoff_s: float, max_gap_s: float) -> str | None:
