@@ -21,8 +21,22 @@ import numpy as np
 
 
 def _opensim():
-    """Import opensim without its default ``opensim.log`` file in the working directory."""
+    """Import opensim without its default ``opensim.log`` file in the working directory.
+
+    ``import opensim`` overwrites ``LD_LIBRARY_PATH`` with ``PATH`` (and
+    prepends to ``PATH``) for the whole process; restore both so that later
+    child processes can still load the ROS 2 wheels' libraries.
+    """
+    import os
+
+    saved = {k: os.environ.get(k) for k in ("LD_LIBRARY_PATH", "PATH")}
     import opensim as osim
+
+    for key, value in saved.items():
+        if value is None:
+            os.environ.pop(key, None)
+        else:
+            os.environ[key] = value
 
     osim.Logger.removeFileSink()
     osim.Logger.setLevelString("error")

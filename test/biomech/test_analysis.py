@@ -143,25 +143,33 @@ TRUTH_FILES = sorted((REPO / "recordings").glob("*.truth.json"))
 @pytest.mark.skipif(not TRUTH_FILES, reason="no recordings/*.truth.json yet: the simulator's bundled recordings have not landed")
 @pytest.mark.parametrize("truth_path", TRUTH_FILES, ids=lambda p: p.name)
 def test_bundled_simulated_recordings_true_moments(truth_path):
-    """Joint moments of the simulator's recordings vs their truth files (schema owned by simulation/).
+    """Joint moments of the simulator's recordings vs their truth files (format ``simulation.truth/1``).
 
-    Expected truth keys: per stance ``touchdown_s`` and ``joints.<name>.time_s``/``moment_nm``.
-    Tolerance 5 % of each joint's peak: our moments are filtered at 12 Hz.
+    The bundled recordings carry realistic noise (1 mm markers, 2 N force);
+    with the default 12 Hz filter, the RMS error over the middle 80 % of each
+    stance (the edges hold the touchdown jump of the surface law and the
+    take-off release, which 100 Hz markers cannot follow) must stay below
+    2 % (ankle), 4 % (knee) and 25 % (hip) of that joint's peak moment: the hip
+    moment is the smallest and collects the double-differentiated marker noise
+    of the three segments below it (measured worst cases: 1.1 %, 3.0 %, 20.3 %;
+    the noise-free round trip is tested in test/simulation/).
     """
     from hop_impedance.io.recording_io import load_recording
 
     rec = load_recording(truth_path.with_name(truth_path.name.replace(".truth.json", ".mcap")))
     truth = json.loads(truth_path.read_text())
     ours = {round(s.touchdown_s, 2): s for s in analyze_recording(rec).stances if s.joints is not None}
+    limits = (0.02, 0.04, 0.25)
     checked = 0
-    for ts in truth.get("stances", []):
+    for ts in truth["stances"]:
         s = ours.get(round(ts["touchdown_s"], 2))
-        if s is None:
-            continue
-        for j, name in enumerate(("ankle", "knee", "hip")):
-            tj = ts["joints"][name]
-            m = np.interp(tj["time_s"], s.joints.time_s, s.joints.moment_nm[:, j])
-            peak = np.max(np.abs(tj["moment_nm"]))
-            assert np.max(np.abs(m - np.asarray(tj["moment_nm"]))) < 0.05 * peak
+        assert s is not None, f"stance at {ts['touchdown_s']:.3f} s not analysed"
+        t = np.asarray(ts["samples"]["t_s"]) - ts["touchdown_s"]
+        true_m = np.asarray(ts["samples"]["moments_nm"])
+        mid = slice(int(0.1 * len(t)), int(0.9 * len(t)))
+        for j, limit in enumerate(limits):
+            m = np.interp(t, s.joints.time_s, s.joints.moment_nm[:, j])
+            rms = np.sqrt(np.mean((m[mid] - true_m[mid, j]) ** 2))
+            assert rms < limit * np.max(np.abs(true_m[:, j])), (ts["index"], j, rms)
         checked += 1
-    assert checked > 0
+    assert checked == len(truth["stances"]) == 10

@@ -12,6 +12,7 @@ rclpy = pytest.importorskip("rclpy")
 from geometry_msgs.msg import WrenchStamped  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 
+from hop_impedance.child_env import child_env  # noqa: E402
 from hop_impedance_msgs.msg import MarkerArray  # noqa: E402
 
 N = 500
@@ -29,7 +30,7 @@ def test_markers_and_wrenches_cross_process_boundary_intact():
         node.create_subscription(MarkerArray, "/mocap/markers", frames.append, qos)
         child = subprocess.Popen(
             [sys.executable, str(Path(__file__).with_name("publisher_process.py")), str(N)],
-            env=dict(os.environ), stderr=subprocess.PIPE, text=True,
+            env=child_env(), stderr=subprocess.PIPE, text=True,
         )
         executor = rclpy.executors.SingleThreadedExecutor(context=context)
         executor.add_node(node)
