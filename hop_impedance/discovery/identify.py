@@ -1,0 +1,214 @@
+"""Identification of a model on measured stances, and its one-step residual signals.
+
+Identification is by regression on the measured signals (fast), not by
+optimising through the simulator:
+
+- joint law: pooled least squares of the ID moments on the regressors of
+  :func:`hop_impedance.discovery.model.stance_features` (``scipy.linalg.lstsq``),
+  timing parameters (activation ``tau``, push-off onset/duration) on a grid;
+- ``surface_compliance``: toe displacement on ``-c Fz^p`` (``p`` on a grid,
+  ``c >= 0``);
+- ``force_plate_offset``: mean raw flight force;
+- ``stream_latency``: the shift (1 ms grid, +-50 ms) that best aligns the
+  marker COM acceleration with ``(Fz - offset) / m - g`` in stance
+  (``scipy.optimize.minimize_scalar`` refines it).
+
+Residual signals (what "the model disagrees with the measurement" means in
+one step, given the measured kinematics and forces):
+
+- ``moment_ankle|knee|hip``: ID moment minus law moment (N m);
+- ``toe``: toe marker displacement minus the surface law's (m), both as changes from the first core sample;
+- ``com``: low-passed ``Fz - offset - m (a_com + g)`` (N): momentum balance;
+- ``flight``: raw flight ``Fz - offset`` (N).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy.linalg import lstsq
+from scipy.optimize import minimize_scalar
+
+from hop_impedance.biomech.joint_angles import JOINT_NAMES
+from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial
+from hop_impedance.discovery.model import (
+    DURATION_GRID_S,
+    JOINT_EFFECTS,
+    ONSET_GRID_S,
+    TAU_GRID_S,
+    ModelSpec,
+    stance_features,
+)
+from hop_impedance.recording import GRAVITY_M_S2
+
+SIGNALS: tuple[str, ...] = tuple(f"moment_{j}" for j in JOINT_NAMES) + ("toe", "com", "flight")
+#: Which residual signals each effect changes.
+EFFECT_SIGNALS: dict[str, tuple[str, ...]] = {
+    **{e: SIGNALS[:3] for e in JOINT_EFFECTS},
+    "surface_compliance": ("toe",),
+    "force_plate_offset": ("com", "flight"),
+    "stream_latency": ("com",),
+}
+COMPLIANCE_EXPONENTS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.85, 1.0)
+LATENCY_RANGE_S = 0.05
+#: Share of stance left out at each end of the stance signals: there the low-pass
+#: smearing of the contact discontinuity (impact, take-off) dominates the ID
+#: moments and the momentum balance, identically in every stance, and would be
+#: "explained" by any flexible candidate (a measured false discovery without it).
+EDGE_FRACTION = 0.12
+
+
+def core(n: int) -> slice:
+    """Samples of a stance of ``n`` samples that the residual signals use."""
+    k = int(round(EDGE_FRACTION * n))
+    return slice(k, n - k)
+
+
+def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance]) -> tuple[np.ndarray, float]:
+    """Pooled least-squares coefficients of the joint law.
+
+    Returns
+    -------
+    coefficients : ndarray, shape (3, n_features)
+    sse : float
+        Summed squared moment residual over joints and stances (N^2 m^2).
+    """
+    feats = [stance_features(spec, s.t_s, s.rho_rad, s.omega_rad_s) for s in stances]
+    cores = [core(len(s.t_s)) for s in stances]
+    coefs, sse = [], 0.0
+    for j in range(3):
+        x = np.concatenate([f[j][c] for f, c in zip(feats, cores)])
+        y = np.concatenate([s.moment_nm[c, j] for s, c in zip(stances, cores)])
+        c, *_ = lstsq(x, y, lapack_driver="gelsy")
+        coefs.append(c)
+        sse += float(np.sum((y - x @ c) ** 2))
+    return np.array(coefs), sse
+
+
+def _fit_timed(spec: ModelSpec, stances, grid: list[dict]) -> tuple[ModelSpec, np.ndarray]:
+    best = None
+    for params in grid:
+        trial_spec = replace(spec, **params)
+        coefs, sse = fit_joint_law(trial_spec, stances)
+        if best is None or sse < best[2]:
+            best = (trial_spec, coefs, sse)
+    return best[0], best[1]
+
+
+def _from_core_start(x: np.ndarray) -> np.ndarray:
+    """Core samples of a stance signal minus its value at the first core sample.
+
+    The toe marker's height *at touchdown* is not a usable zero: the low-pass
+    rounds the landing corner, so the filtered toe is still a few mm above
+    its resting height there. Displacements are therefore compared as
+    changes from the first core sample, for data and law alike.
+    """
+    c = x[core(len(x))]
+    return c - c[0] if c.size else c
+
+
+def fit_compliance(stances: list[MeasuredStance], offset_n: float) -> tuple[float, float]:
+    """(c m/N^p, p) of toe displacement ``-c Fz^p``, c >= 0, best p on :data:`COMPLIANCE_EXPONENTS`."""
+    y = np.concatenate([_from_core_start(s.toe_dz_m) for s in stances])
+    forces = [np.maximum(s.fz_lp_n - offset_n, 0.0) for s in stances]
+    best = (0.0, 1.0, np.inf)
+    for p in COMPLIANCE_EXPONENTS:
+        x = -np.concatenate([_from_core_start(f**p) for f in forces])
+        c = max(float(x @ y / (x @ x)), 0.0) if x @ x > 0 else 0.0
+        sse = float(np.sum((y - c * x) ** 2))
+        if sse < best[2]:
+            best = (c, p, sse)
+    return best[0], best[1]
+
+
+def fit_offset(stances: list[MeasuredStance]) -> float:
+    """Mean raw flight force (N) over the stances' preceding flights (0 without flight samples)."""
+    f = np.concatenate([s.flight_fz_n for s in stances])
+    return float(f.mean()) if f.size else 0.0
+
+
+def com_residual(trial: MeasuredTrial, s: MeasuredStance, spec: ModelSpec) -> np.ndarray:
+    """``Fz_lp - offset - m (a_com(t + extra latency) + g)`` (N), shape (N,)."""
+    extra = spec.latency_s - trial.marker_latency_s
+    acc = trial.com_acc_z(s.abs_t_s + extra)
+    return s.fz_lp_n - spec.offset_n - trial.body_mass_kg * (acc + GRAVITY_M_S2)
+
+
+def fit_latency(trial: MeasuredTrial, stances: list[MeasuredStance], spec: ModelSpec) -> float:
+    """Total marker latency (s) minimising the summed squared COM residual."""
+
+    def sse(latency: float) -> float:
+        trial_spec = replace(spec, latency_s=latency)
+        return float(sum(np.sum(com_residual(trial, s, trial_spec)[core(len(s.t_s))] ** 2) for s in stances))
+
+    base = trial.marker_latency_s
+    grid = base + np.arange(-LATENCY_RANGE_S, LATENCY_RANGE_S + 1e-9, 0.002)
+    values = [sse(v) for v in grid]
+    i = int(np.argmin(values))
+    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
+    res = minimize_scalar(sse, bounds=(lo, hi), method="bounded", options={"xatol": 1e-4})
+    return float(res.x) if res.fun <= values[i] else float(grid[i])
+
+
+def fit_ground_damping(stances: list[MeasuredStance], c: float, p: float, offset_n: float) -> float:
+    """Surface damping (N s/m, >= 0) of ``Fz = k pen^n - d y'`` given the displacement law, by least squares."""
+    rows, target = [], []
+    for s in stances:
+        pen = np.maximum(-s.toe_dz_m, 0.0)
+        ydot = np.gradient(s.toe_dz_m, s.t_s)
+        elastic = (pen / c) ** (1.0 / p) if c > 0 else np.zeros_like(pen)
+        rows.append(-ydot)
+        target.append(np.maximum(s.fz_lp_n - offset_n, 0.0) - elastic)
+    x, y = np.concatenate(rows), np.concatenate(target)
+    return max(float(x @ y / (x @ x)), 0.0) if x @ x > 0 else 0.0
+
+
+def identify(spec: ModelSpec, trial: MeasuredTrial, stances: list[MeasuredStance],
+             effect: str | None = None) -> tuple[ModelSpec, np.ndarray]:
+    """Fit the model (optionally with ``effect`` added) on ``stances``.
+
+    The nonlinear parameters of effects already in ``spec`` stay as they are;
+    the joint-law coefficients are always re-fitted.
+
+    Returns
+    -------
+    spec : ModelSpec
+        With ``effect`` appended and its parameters set.
+    coefficients : ndarray, shape (3, n_features)
+    """
+    if effect is not None:
+        spec = spec.with_effect(effect)
+    if effect == "time_dependent_activation":
+        return _fit_timed(spec, stances, [{"tau_s": t} for t in TAU_GRID_S])
+    if effect == "active_push_off":
+        grid = [{"onset_s": o, "duration_s": d} for o in ONSET_GRID_S for d in DURATION_GRID_S]
+        return _fit_timed(spec, stances, grid)
+    if effect == "surface_compliance":
+        c, p = fit_compliance(stances, spec.offset_n)
+        spec = replace(spec, compliance=(c, p), ground_damping_n_s_m=fit_ground_damping(stances, c, p, spec.offset_n))
+    elif effect == "force_plate_offset":
+        spec = replace(spec, offset_n=fit_offset(stances))
+    elif effect == "stream_latency":
+        spec = replace(spec, latency_s=fit_latency(trial, stances, spec))
+    coefs, _ = fit_joint_law(spec, stances)
+    return spec, coefs
+
+
+def residuals(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: MeasuredStance) -> dict[str, np.ndarray]:
+    """One-step residual of every signal in :data:`SIGNALS` on one stance (units in the module docstring).
+
+    Stance signals cover the stance without its first and last :data:`EDGE_FRACTION`.
+    """
+    feats = stance_features(spec, s.t_s, s.rho_rad, s.omega_rad_s)
+    out = {f"moment_{name}": s.moment_nm[:, j] - feats[j] @ coefs[j] for j, name in enumerate(JOINT_NAMES)}
+    out["com"] = com_residual(trial, s, spec)
+    keep = core(len(s.t_s))
+    out = {k: v[keep] for k, v in out.items()}
+    predicted_toe = 0.0
+    if spec.compliance is not None:
+        c, p = spec.compliance
+        predicted_toe = -c * _from_core_start(np.maximum(s.fz_lp_n - spec.offset_n, 0.0) ** p)
+    out["toe"] = _from_core_start(s.toe_dz_m) - predicted_toe
+    out["flight"] = s.flight_fz_n - spec.offset_n
+    return out

@@ -1,0 +1,215 @@
+"""The measured side of the comparison: per-stance signals extracted from a contract recording.
+
+Everything the discovery workflow compares with a model comes from here, on
+the force-plate time base, time since touchdown:
+
+- joint angles ``rho``, velocities ``omega`` and inverse-dynamics moments
+  (extensor positive) from :func:`hop_impedance.biomech.analysis.analyze_recording`;
+- the *raw* vertical plate force (no flight zeroing: a plate offset must stay
+  visible) and the same low-passed at the analysis cut-off;
+- the toe marker's height change since touchdown (surface displacement);
+- the whole-body COM vertical acceleration from the markers, as a spline
+  that can be evaluated at shifted times (stream latency);
+- the touchdown state ``[x_toe, z_toe, q1..q4]`` and rates for forward simulation;
+- the raw vertical force of the flight before the stance.
+
+Stances the analysis rejects (cut at a file edge, too short, marker gaps)
+are kept in ``rejected`` with the analysis' reason; nothing is dropped silently.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording
+from hop_impedance.biomech.filtering import fill_gaps, lowpass, sampling_rate_hz
+from hop_impedance.biomech.kinematics import compute_kinematics, sagittal_markers
+from hop_impedance.recording import GRAVITY_M_S2, Recording
+from hop_impedance.simulation.dynamics import Chain, chain_from_body_model, com_offset_jacobian
+from hop_impedance.simulation.stance import TouchdownState
+
+#: Fewer force samples than this in an analysed stance: rejected for discovery.
+MIN_STANCE_SAMPLES = 40
+#: Flight samples this close to a contact are not used for the flight force (s).
+FLIGHT_MARGIN_S = 0.03
+
+
+@dataclass
+class MeasuredStance:
+    """One analysed stance (arrays on the force-plate samples inside the stance).
+
+    Attributes
+    ----------
+    index : int
+        Index among the analysis' stances.
+    touchdown_s, takeoff_s : float
+        Event times (s since the recording's first stamp).
+    t_s : ndarray, shape (N,)
+        Time since touchdown (s).
+    rho_rad, omega_rad_s, moment_nm : ndarray, shape (N, 3)
+        Joint angles, velocities, ID moments (ankle, knee, hip; flexion
+        positive, extensor moment positive).
+    fz_raw_n, fz_lp_n : ndarray, shape (N,)
+        Raw vertical force and the same low-passed (N), offsets *not* removed.
+    toe_dz_m : ndarray, shape (N,)
+        Toe marker height minus its height at touchdown (m), low-passed.
+    touchdown : TouchdownState
+        ``g = [x_toe, 0, q1..q4]``, ``gd = [0, vz_toe, qd1..qd4]`` at touchdown.
+    flight_fz_n : ndarray, shape (F,)
+        Raw vertical force in the flight before this stance (N), margins trimmed.
+    """
+
+    index: int
+    touchdown_s: float
+    takeoff_s: float
+    t_s: np.ndarray
+    rho_rad: np.ndarray
+    omega_rad_s: np.ndarray
+    moment_nm: np.ndarray
+    fz_raw_n: np.ndarray
+    fz_lp_n: np.ndarray
+    toe_dz_m: np.ndarray
+    touchdown: TouchdownState
+    flight_fz_n: np.ndarray
+
+    @property
+    def abs_t_s(self) -> np.ndarray:
+        """Sample times since the recording start (s)."""
+        return self.t_s + self.touchdown_s
+
+
+@dataclass
+class MeasuredTrial:
+    """All stances of a recording ready for comparison.
+
+    Attributes
+    ----------
+    stances : list of MeasuredStance
+    rejected : list of dict
+        ``{"index", "touchdown_s", "reason"}`` for every stance not used.
+    chain : Chain
+        Segment parameters of the body model the analysis used.
+    body_mass_kg : float
+    com_acc_z : CubicSpline
+        Whole-body COM vertical acceleration (m/s^2) as a function of time
+        since the recording start (s), from the (low-passed) markers.
+    marker_latency_s : float
+        Latency that was removed from the marker stamps before analysis (s).
+    warnings : list of str
+    """
+
+    stances: list[MeasuredStance]
+    rejected: list[dict]
+    chain: Chain
+    body_mass_kg: float
+    com_acc_z: CubicSpline
+    marker_latency_s: float = 0.0
+    warnings: list[str] = field(default_factory=list)
+
+
+def shift_marker_stream(rec: Recording, latency_s: float) -> Recording:
+    """Copy of ``rec`` whose marker stamps are moved ``latency_s`` earlier.
+
+    A marker sample stamped ``t`` that shows the body at ``t - latency_s``
+    (positive latency = markers lag the plate) gets the stamp ``t - latency_s``.
+    """
+    if rec.markers is None or latency_s == 0.0:
+        return rec
+    shift = int(round(latency_s * 1e9))
+    return replace(rec, markers=replace(rec.markers, stamp_ns=rec.markers.stamp_ns - shift))
+
+
+def _com_z_spline(marker_t: np.ndarray, markers_xz: np.ndarray, model, cutoff_hz: float) -> CubicSpline:
+    kin, _ = compute_kinematics(marker_t, markers_xz, marker_t, model, cutoff_hz)
+    z = kin.body_com_xz(model)[:, 1]
+    ok = np.isfinite(z)
+    return CubicSpline(marker_t[ok], z[ok]).derivative(2)
+
+
+def measure_trial(rec: Recording, marker_latency_s: float = 0.0, options: AnalysisOptions | None = None) -> MeasuredTrial:
+    """Extract the per-stance signals of a recording (see module docstring).
+
+    Parameters
+    ----------
+    rec : Recording
+        Contract recording with force plate, markers and subject.
+    marker_latency_s : float
+        Marker latency to remove first (s, positive = markers lag).
+    options : AnalysisOptions, optional
+
+    Returns
+    -------
+    MeasuredTrial
+
+    Raises
+    ------
+    ValueError
+        No markers, no subject, or no stance usable for discovery.
+    """
+    if rec.markers is None or len(rec.markers) < 8:
+        raise ValueError(f"{rec.source or 'recording'}: discovery needs marker data on the marker topic")
+    options = options or AnalysisOptions()
+    rec = shift_marker_stream(rec, marker_latency_s)
+    analysis = analyze_recording(rec, options)
+    if analysis.model is None:
+        raise ValueError(f"{rec.source or 'recording'}: no body model could be built from the markers")
+    t_f = (rec.force.stamp_ns - analysis.start_ns) * 1e-9
+    t_m = (rec.markers.stamp_ns - analysis.start_ns) * 1e-9
+    fz_raw = rec.force.force_n[:, 2].astype(float)
+    fz_lp = lowpass(fz_raw, sampling_rate_hz(t_f), options.force_cutoff_hz)
+    xz = sagittal_markers(rec.markers)
+    filled, _, _ = fill_gaps(t_m, xz, options.max_gap_s)
+    kin, _ = compute_kinematics(t_m, xz, t_f, analysis.model, options.marker_cutoff_hz, options.max_gap_s)
+    com_acc = _com_z_spline(t_m, np.where(np.isfinite(filled), filled, np.nan), analysis.model, options.marker_cutoff_hz)
+    chain = chain_from_body_model(analysis.model)
+    stances, rejected = [], []
+    prev_takeoff = float(t_f[0]) - 1.0
+    for s in analysis.stances:
+        reason = s.rejection_reason
+        if reason is None and len(s.joints.time_s) < MIN_STANCE_SAMPLES:
+            reason = f"too short for discovery: {len(s.joints.time_s)} force samples < {MIN_STANCE_SAMPLES}"
+        sel = (t_f >= s.touchdown_s) & (t_f <= s.takeoff_s)
+        if reason is None and not np.all(np.isfinite(kin.points_xz[sel])):
+            reason = "marker kinematics not finite in stance"
+        if reason is not None:
+            rejected.append({"index": s.index, "touchdown_s": s.touchdown_s, "reason": reason})
+            prev_takeoff = s.takeoff_s
+            continue
+        stances.append(_measured_stance(s, sel, t_f, fz_raw, fz_lp, kin, chain, prev_takeoff))
+        prev_takeoff = s.takeoff_s
+    if not stances:
+        reasons = "; ".join(f"stance {r['index']}: {r['reason']}" for r in rejected) or "no stance detected"
+        raise ValueError(f"{rec.source or 'recording'}: no stance usable for discovery ({reasons})")
+    mass = rec.subject.body_mass_kg
+    return MeasuredTrial(stances, rejected, chain, mass, com_acc, marker_latency_s, list(analysis.warnings))
+
+
+def _measured_stance(s, sel, t_f, fz_raw, fz_lp, kin, chain: Chain, prev_takeoff_s: float) -> MeasuredStance:
+    j = s.joints
+    n = len(j.time_s)
+    idx = np.nonzero(sel)[0][:n]
+    toe_z = kin.points_xz[idx, 0, 1]
+    i0 = idx[0]
+    q0, qd0 = kin.q[i0], kin.qd[i0]
+    # COM velocity at touchdown from the marker COM; toe z velocity = COM's minus the angles' share.
+    com_z = np.einsum("s,ns->n", chain.mass_kg, kin.com_xz[max(i0 - 2, 0): i0 + 3, :, 1]) / chain.total_mass_kg
+    tt = t_f[max(i0 - 2, 0): i0 + 3]
+    vz_com = float(np.polyfit(tt - tt[0], com_z, 1)[0])
+    vz_toe = vz_com - float(com_offset_jacobian(chain, q0)[1] @ qd0)
+    g0 = np.r_[kin.points_xz[i0, 0, 0], 0.0, q0]
+    gd0 = np.r_[0.0, vz_toe, qd0]
+    fl = (t_f > prev_takeoff_s + FLIGHT_MARGIN_S) & (t_f < s.touchdown_s - FLIGHT_MARGIN_S)
+    return MeasuredStance(
+        index=s.index, touchdown_s=float(s.touchdown_s), takeoff_s=float(s.takeoff_s), t_s=np.asarray(j.time_s),
+        rho_rad=np.asarray(j.angle_rad), omega_rad_s=np.asarray(j.angular_velocity_rad_s),
+        moment_nm=np.asarray(j.moment_nm), fz_raw_n=fz_raw[idx], fz_lp_n=fz_lp[idx],
+        toe_dz_m=toe_z - toe_z[0], touchdown=TouchdownState(g0, gd0), flight_fz_n=fz_raw[fl],
+    )
+
+
+def weight_n(trial: MeasuredTrial) -> float:
+    """Body weight (N) with the contract's g."""
+    return trial.body_mass_kg * GRAVITY_M_S2

@@ -1,0 +1,183 @@
+"""The discovery workflow end to end: baseline, localise, select, report (issue 8).
+
+:func:`discover` returns the JSON-ready document described in ``docs/discovery.md``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import trapezoid
+
+from hop_impedance.biomech.joint_angles import JOINT_NAMES
+from hop_impedance.discovery.forward import held_out_forward_gap
+from hop_impedance.discovery.identify import SIGNALS, core, identify, residuals
+from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
+from hop_impedance.discovery.model import ModelSpec, feature_names
+from hop_impedance.discovery.selection import ambiguous_with, passes, remaining, score_candidates
+from hop_impedance.recording import Recording
+
+SCHEMA = "hop_impedance.discover/1"
+MAX_STEPS = 4
+
+#: What separates look-alike effects (reported with an ambiguity).
+SEPARATING_EVIDENCE = {
+    frozenset({"angle_dependent_stiffness", "time_dependent_activation"}):
+        "separable only by stances whose angle course differs at the same time since touchdown "
+        "(hops on different surfaces in one recording); on one surface both make stiffness rise through stance",
+    frozenset({"angle_dependent_stiffness", "rate_dependent_stiffness"}):
+        "separated by residual correlation with angular velocity versus angle; k3 S and k1 dr^2 are close when "
+        "every stance has the same angle-velocity course",
+    frozenset({"joint_damping", "active_push_off"}):
+        "separated by the time course: damping follows angular velocity, push-off has its own late-stance pulse",
+    frozenset({"stream_latency", "force_plate_offset"}):
+        "separated by flight: an offset shows as non-zero flight force, a latency only while the force changes",
+}
+
+
+def _corr(a: np.ndarray, b: np.ndarray) -> float | None:
+    if a.size < 3 or np.std(a) == 0 or np.std(b) == 0:
+        return None
+    return float(np.corrcoef(a, b)[0, 1])
+
+
+def residual_evidence(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial) -> dict:
+    """Localisation and residual structure of the current model's one-step residuals.
+
+    Per signal: RMS over early/mid/late thirds of stance, and the correlation
+    of the residual with joint angle change, angular velocity, time since
+    touchdown, surface (toe) displacement and the other stream's
+    momentum-balance residual (``com``).
+    """
+    res = [residuals(spec, coefs, trial, s) for s in trial.stances]
+    out = {}
+    for sig in SIGNALS:
+        if sig == "flight":
+            v = np.concatenate([r[sig] for r in res])
+            out[sig] = {"mean": float(v.mean()) if v.size else None, "rms": float(np.sqrt(np.mean(v**2))) if v.size else None,
+                        "n_samples": int(v.size)}
+            continue
+        thirds = {k: [] for k in ("early", "mid", "late")}
+        for r in res:
+            for k, chunk in zip(thirds, np.array_split(r[sig], 3)):
+                thirds[k].append(chunk)
+        v = np.concatenate([r[sig] for r in res])
+        entry = {"rms": float(np.sqrt(np.mean(v**2))), **{f"rms_{k}": float(np.sqrt(np.mean(np.concatenate(c) ** 2)))
+                                                            for k, c in thirds.items()}}
+        j = JOINT_NAMES.index(sig.split("_")[1]) if sig.startswith("moment_") else 0
+        regressors = {
+            "angle_change": np.concatenate([(s.rho_rad[:, j] - s.rho_rad[0, j])[core(len(s.t_s))] for s in trial.stances]),
+            "angular_velocity": np.concatenate([s.omega_rad_s[core(len(s.t_s)), j] for s in trial.stances]),
+            "time_since_touchdown": np.concatenate([s.t_s[core(len(s.t_s))] for s in trial.stances]),
+            "surface_displacement": np.concatenate([s.toe_dz_m[core(len(s.t_s))] for s in trial.stances]),
+            "other_stream": np.concatenate([r["com"] for r in res]),
+        }
+        entry["correlation"] = {k: _corr(v, x) for k, x in regressors.items() if not (sig == "com" and k == "other_stream")}
+        out[sig] = entry
+    work = []
+    for s in trial.stances:
+        work.append(trapezoid(-s.moment_nm * s.omega_rad_s, s.t_s, axis=0))
+    out["net_joint_work_j"] = dict(zip(JOINT_NAMES, np.mean(work, axis=0).round(3).tolist()))
+    return out
+
+
+def parameters_of(spec: ModelSpec, coefs: np.ndarray, effect: str | None) -> dict:
+    """JSON parameters of the model (all of it for the baseline, the effect's own ones otherwise)."""
+    names = feature_names(spec)
+    law = {j: {n: float(c) for n, c in zip(names, coefs[k])} for k, j in enumerate(JOINT_NAMES)}
+    if effect in (None, "angle_dependent_stiffness", "rate_dependent_stiffness", "joint_damping"):
+        out = {"joint_law": law}
+    elif effect == "time_dependent_activation":
+        a_min = {j: (1.0 - law[j]["act_k0"] / law[j]["k0"]) if law[j]["k0"] else None for j in JOINT_NAMES}
+        out = {"tau_s": spec.tau_s, "a_min": a_min, "joint_law": law}
+    elif effect == "active_push_off":
+        out = {"onset_s": spec.onset_s, "duration_s": spec.duration_s,
+               "amplitude_nm": {j: law[j]["push"] for j in JOINT_NAMES}, "joint_law": law}
+    elif effect == "surface_compliance":
+        c, p = spec.compliance
+        out = {"displacement_law": "toe dz = -c Fz^p", "c": c, "p": p,
+               "stiffness_n_per_m_n": c ** (-1.0 / p) if c > 0 else None, "exponent_n": 1.0 / p,
+               "damping_n_s_per_m": spec.ground_damping_n_s_m}
+    elif effect == "stream_latency":
+        out = {"latency_s": spec.latency_s}
+    else:
+        out = {"offset_n": spec.offset_n}
+    return out
+
+
+def discover(rec: Recording, *, forward: bool = True, max_steps: int = MAX_STEPS) -> dict:
+    """Name the effects the baseline model misses in a recording (see ``docs/discovery.md``).
+
+    Parameters
+    ----------
+    rec : Recording
+        Contract recording (force plate, markers, subject).
+    forward : bool
+        Compute the forward-simulation gaps (baseline, per step, final). Off
+        for the hit-rate study (selection does not use them).
+    max_steps : int
+        Most effects added.
+
+    Returns
+    -------
+    dict
+        ``schema``, ``baseline_gap``, ``steps``, ``final_gap``,
+        ``effects_found``, ``stances`` (used / rejected), ``selection``.
+    """
+    trial = measure_trial(rec)
+    spec = ModelSpec()
+    spec_fit, coefs = identify(spec, trial, trial.stances)
+    baseline_gap = held_out_forward_gap(spec, trial)[0] if forward else None
+    doc = {
+        "schema": SCHEMA,
+        "baseline": {"model": "constant joint stiffness k0 (M = k0 (rho - rho0)), no damping, rigid ground, "
+                              "streams in sync, no active moment",
+                     "parameters": parameters_of(spec_fit, coefs, None),
+                     "evidence": residual_evidence(spec_fit, coefs, trial)},
+        "baseline_gap": baseline_gap,
+        "steps": [],
+        "stances": {"used": [s.index for s in trial.stances], "rejected": trial.rejected},
+        "selection": {"alpha": None, "min_gain": None, "rounds": []},
+    }
+    from hop_impedance.discovery import selection as sel
+
+    doc["selection"]["alpha"], doc["selection"]["min_gain"] = sel.ALPHA, sel.MIN_GAIN
+    gap = baseline_gap
+    for _ in range(max_steps):
+        cands = remaining(spec)
+        if not cands:
+            break
+        scores = score_candidates(spec, trial, cands)
+        doc["selection"]["rounds"].append({sc.effect: {"mean_gain": sc.mean_gain, "p_value": sc.p_value,
+                                                       "passes": passes(sc, len(cands))} for sc in scores})
+        ok = [sc for sc in scores if passes(sc, len(cands))]
+        if not ok:
+            break
+        best = max(ok, key=lambda sc: sc.mean_gain)
+        evidence = residual_evidence(spec_fit, coefs, trial)
+        spec, _ = identify(spec, trial, trial.stances, best.effect)
+        if best.effect == "stream_latency":
+            trial = measure_trial(rec, marker_latency_s=spec.latency_s)
+        spec_fit, coefs = identify(spec, trial, trial.stances)
+        new_gap = held_out_forward_gap(spec, trial)[0] if forward else None
+        amb = ambiguous_with(best, scores, len(cands))
+        for a in amb:
+            a["separating_evidence"] = SEPARATING_EVIDENCE.get(frozenset({best.effect, a["effect"]}),
+                                                               "no specific separating evidence in this recording")
+        doc["steps"].append({
+            "effect": best.effect,
+            "evidence": {"held_out_gain": best.mean_gain, "held_out_gain_per_signal": best.signal_gains,
+                         "per_stance_gains": best.gains.round(4).tolist(), "residuals_before": evidence},
+            "parameters": parameters_of(spec, coefs, best.effect),
+            "p_value": best.p_value,
+            "p_value_threshold": sel.ALPHA / len(cands),
+            "ambiguous_with": amb,
+            "gap_before": gap,
+            "gap_after": new_gap,
+        })
+        gap = new_gap
+    doc["final_gap"] = gap
+    doc["effects_found"] = [st["effect"] for st in doc["steps"]]
+    doc["final_model"] = {"effects": list(spec.effects), "parameters": parameters_of(spec_fit, coefs, None),
+                          "latency_s": spec.latency_s, "offset_n": spec.offset_n,
+                          "compliance": list(spec.compliance) if spec.compliance else None}
+    return doc

@@ -1,0 +1,197 @@
+"""A cheap recording of independent stances: the test-case generator of the discovery workflow.
+
+Why this exists
+---------------
+:func:`hop_impedance.simulation.simulate.simulate_recording` sequences hops
+with a calibrated push-off controller. A law without a push-off (the
+discovery baseline: constant stiffness, no damping, no active moment) cannot
+sustain hopping there, and its calibration costs several seconds. The
+discovery workflow needs many recordings of *any* law, including the
+baseline itself, so this module simulates each stance on its own from a
+touchdown state (nominal posture and speed plus seeded variability) and
+joins the stances by smooth flights.
+
+Model (documented simplifications)
+----------------------------------
+- Stances: :func:`hop_impedance.simulation.stance.simulate_stance`, exact
+  forward dynamics with the chosen law and surface (physical).
+- Flights: *not* ballistic. The COM and the segment angles follow quintics
+  (``scipy.interpolate.BPoly``) from the take-off state (position, velocity,
+  acceleration) to the next touchdown state; at both ends the COM
+  acceleration is ``-g``. The force plate reads zero in flight. This stands
+  in for the energy the missing push-off would supply; no stance quantity
+  depends on it.
+- Touchdown speed: ``g (1/f - T_nominal) / 2`` (the symmetric flight of a hop
+  of frequency ``f``), ``T_nominal`` the stance time of one nominal stance.
+- ``"rigid"`` means :data:`RIGID_NO_BOUNCE`: the simulator's rigid law with
+  ten times its Hunt-Crossley damping, because with zero joint moments at
+  touchdown the light foot bounces off the simulator's ``RIGID`` after 20 ms.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import BPoly
+
+from hop_impedance.biomech.body_model import body_model_from_stature
+from hop_impedance.recording import Recording, Subject
+from hop_impedance.simulation.dynamics import Chain, body_com, com_offset_jacobian, com_velocity, chain_from_body_model
+from hop_impedance.simulation.ground import GroundLaw, surface
+from hop_impedance.simulation.hopping_trial import (
+    Flight,
+    HoppingConfig,
+    HoppingTrial,
+    StanceRecord,
+    scale_push_off,
+    touchdown_posture,
+    touchdown_state,
+)
+from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, SEED_SUBJECT, Effects, build_law
+from hop_impedance.simulation.sensors import SensorConfig, sample_recording
+from hop_impedance.simulation.stance import simulate_stance
+
+#: The rigid surface without the foot bounce (see module docstring).
+RIGID_NO_BOUNCE = GroundLaw("rigid", 1.0e8, 1.5, 1.0e9, 1.5)
+
+
+def ground_law(name: str) -> GroundLaw:
+    """Surface by name; ``"rigid"`` is :data:`RIGID_NO_BOUNCE`, others as :func:`surface`."""
+    return RIGID_NO_BOUNCE if name == "rigid" else surface(name)
+
+
+@dataclass(frozen=True)
+class BridgedFlight:
+    """Flight whose COM and angles follow quintics between two given states (duck-types :class:`Flight`)."""
+
+    t_start_s: float
+    duration_s: float
+    com: BPoly
+    angles: BPoly
+
+    def evaluate(self, chain: Chain, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Generalized coordinates and velocities (N, 6) at absolute times ``t_s`` (s)."""
+        tau = np.clip(np.asarray(t_s, float) - self.t_start_s, 0.0, self.duration_s)
+        q, qd = self.angles(tau), self.angles.derivative()(tau)
+        g = np.zeros((len(tau), 6))
+        g[:, 2:] = q
+        g[:, 0:2] = self.com(tau) - body_com(chain, g)
+        gd = np.zeros_like(g)
+        gd[:, 2:] = qd
+        jac = np.array([com_offset_jacobian(chain, qi) for qi in q])
+        gd[:, 0:2] = self.com.derivative()(tau) - np.einsum("nak,nk->na", jac, qd)
+        return g, gd
+
+
+def _bridge(chain: Chain, t0: float, dur: float, g0, gd0, gdd0, g1, gd1) -> BridgedFlight:
+    grav = np.array([0.0, -chain.gravity_m_s2])
+    c0, c1 = body_com(chain, g0), body_com(chain, g1)
+    v0, v1 = com_velocity(chain, g0, gd0), com_velocity(chain, g1, gd1)
+    com = BPoly.from_derivatives([0.0, dur], np.array([[c0, v0, grav], [c1, v1, grav]]))
+    angles = BPoly.from_derivatives([0.0, dur], np.array([[g0[2:], gd0[2:], gdd0[2:]], [g1[2:], gd1[2:], np.zeros(4)]]))
+    return BridgedFlight(t0, dur, com, angles)
+
+
+def nominal_touchdown_speed(chain: Chain, law, ground: GroundLaw, rho_td, freq_hz: float) -> tuple[float, float]:
+    """(touchdown speed m/s, nominal stance s) for hops at ``freq_hz`` with symmetric flights."""
+    q = touchdown_posture(chain, np.asarray(rho_td, float))
+    speed = chain.gravity_m_s2 * 0.4 / freq_hz / 2.0
+    for _ in range(2):
+        st = simulate_stance(chain, law, ground, touchdown_state(chain, q, np.array([0.0, -speed]), 0.0),
+                             t_max_s=2.0 / freq_hz, rtol=1e-6, atol=1e-8)
+        speed = max(chain.gravity_m_s2 * (1.0 / freq_hz - st.duration_s) / 2.0, 0.3)
+    return speed, st.duration_s
+
+
+def simulate_stance_set_recording(
+    freq_hz: float = 2.2,
+    surfaces: tuple[str, ...] = ("rigid",),
+    n_hops: int = 8,
+    seed: int = 1,
+    effects: Effects = Effects(angle_dependent_stiffness=False, damping=False, push_off=False),
+    sensors: SensorConfig = SensorConfig(),
+    *,
+    subject: Subject = SEED_SUBJECT,
+    touchdown_rho_rad=DEFAULT_TOUCHDOWN_RHO,
+    posture_sd_rad: float = 0.02,
+    speed_sd: float = 0.05,
+    push_sd: float = 0.05,
+    rtol: float = 1e-7,
+) -> tuple[Recording, dict]:
+    """Recording of ``n_hops`` independently simulated stances (see module docstring).
+
+    Parameters
+    ----------
+    freq_hz : float
+        Hop frequency (Hz); stiffness from seed Table 2 (interpolated).
+    surfaces : tuple of str
+        Surfaces cycled over the hops (``"rigid"``, ``"hard"``, ``"soft"``);
+        the push-off timing and touchdown speed are tuned on the first.
+    n_hops : int
+    seed : int
+        Seeds variability (posture, speed, push-off scale) and sensor noise.
+    effects : Effects
+        Law effects present (default: the discovery baseline, constant stiffness).
+    sensors : SensorConfig
+    posture_sd_rad, speed_sd, push_sd : float
+        Hop-to-hop variability of joint angles (rad), touchdown speed and
+        push-off amplitude (fractions).
+
+    Returns
+    -------
+    recording : Recording
+    truth : dict
+        ``effects``, ``law``, ``surfaces``, ``sensors``, and per stance
+        ``touchdown_s``, ``takeoff_s``, ``surface``.
+
+    Raises
+    ------
+    ValueError
+        If a stance does not end in take-off.
+    """
+    if n_hops < 1:
+        raise ValueError(f"n_hops must be at least 1, got {n_hops}")
+    rng = np.random.default_rng(seed)
+    chain = chain_from_body_model(body_model_from_stature(subject))
+    laws = [ground_law(s) for s in surfaces]
+    passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0)
+    speed_nom, ts_nom = nominal_touchdown_speed(chain, passive, laws[0], touchdown_rho_rad, freq_hz)
+    law = build_law(freq_hz, effects, 0.35 * ts_nom, 0.6 * ts_nom)
+    flight_nom = max(1.0 / freq_hz - ts_nom, 0.1)
+    tds = []
+    for i in range(n_hops):
+        rho = np.asarray(touchdown_rho_rad, float) + rng.normal(0.0, posture_sd_rad, 3)
+        speed = speed_nom * (1.0 + rng.normal(0.0, speed_sd))
+        tds.append(touchdown_state(chain, touchdown_posture(chain, rho), np.array([0.0, -speed]), 0.0))
+    lead = 0.4
+    rest = np.array([tds[0].g[2:], np.zeros(4), np.zeros(4)])
+    c_td = body_com(chain, tds[0].g)
+    v_td = com_velocity(chain, tds[0].g, tds[0].gd)
+    com0 = c_td - v_td * lead + 0.5 * np.array([0.0, -chain.gravity_m_s2]) * lead**2
+    flights: list = [Flight(0.0, lead, com0, v_td - np.array([0.0, -chain.gravity_m_s2]) * lead,
+                            BPoly.from_derivatives([0.0, lead], np.array([rest, rest])), chain.gravity_m_s2)]
+    stances, t_td = [], lead
+    for i, td in enumerate(tds):
+        hop_law = scale_push_off(law, 1.0 + rng.normal(0.0, push_sd))
+        ground = laws[i % len(laws)]
+        st = simulate_stance(chain, hop_law, ground, td, t_max_s=2.0 / freq_hz, rtol=rtol, atol=rtol * 1e-2)
+        if st.end_reason != "take_off":
+            raise ValueError(f"hop {i}: stance ended by {st.end_reason} after {st.duration_s:.3f} s")
+        stances.append(StanceRecord(i, t_td, st, ground, hop_law, td))
+        t_to = t_td + st.duration_s
+        nxt = tds[i + 1] if i + 1 < n_hops else tds[0]
+        flights.append(_bridge(chain, t_to, flight_nom, st.g[-1], st.gd[-1], st.gdd[-1], nxt.g, nxt.gd))
+        t_td = t_to + flight_nom
+    t_end = stances[-1].t_takeoff_s + 0.5 * flight_nom
+    config = HoppingConfig(freq_hz, n_hops, laws[0], law, tuple(float(r) for r in touchdown_rho_rad))
+    trial = HoppingTrial(config, chain, stances, flights, t_end, {})
+    recording, _ = sample_recording(trial, sensors, subject, np.random.default_rng([seed, 1]))
+    truth = {
+        "generator": "hop_impedance.simulation.stance_set",
+        "seed": seed, "freq_hz": freq_hz, "effects": effects.to_dict(), "law": law.to_dict(),
+        "surfaces": list(surfaces), "sensors": sensors.to_dict(),
+        "stances": [{"touchdown_s": r.t_touchdown_s, "takeoff_s": r.t_takeoff_s, "surface": r.surface.name}
+                    for r in stances],
+    }
+    return recording, truth
