@@ -18,6 +18,25 @@ wait_for_subscribers_s : float
     subscriber (so nothing published before discovery is lost).
 reliable : bool
     Publish sensor topics reliably (default true: a replay should not lose data).
+consumers : list of str
+    Fully qualified names of the nodes that consume the played topics (e.g.
+    ``/stance_detector``, ``/inverse_dynamics``). With ``rate`` 0 and
+    consumers given, flow control is by *consumer progress* instead of
+    acknowledgements: each consumer reports on ``/pipeline/progress`` the
+    newest input stamp it has processed, and the replay never runs more than
+    ``max_ahead_s`` of recording time ahead of the slowest one. Subscriber
+    queues (KEEP_LAST, depth ``qos.INPUT_DEPTH`` = 2000) then hold at most
+    ``max_ahead_s`` x rate messages (500 at 1 kHz), so nothing overflows
+    however slow a consumer is. A consumer silent for ``consumer_timeout_s``
+    (crashed) is left out until it reports again, so a dead node cannot
+    stall the replay.
+max_ahead_s : float
+    Recording time the replay may run ahead of the slowest consumer (s).
+
+At the end the replay waits until every message is acknowledged and then
+publishes a ``std_msgs/Header`` on ``/replay/end_of_stream`` (reliable,
+transient-local) whose stamp is the newest played stamp: the consumers flush
+their stages (the last stance) when they have received data up to it.
 
 Messages are published as the CDR bytes stored in the file (no decode /
 re-encode) except on loop passes after the first. ``/subject`` is published
@@ -35,8 +54,9 @@ from rclpy.node import Node
 from rclpy.serialization import deserialize_message, serialize_message
 
 from hop_impedance.io.mcap_io import MessageStream, RecordingError
+from hop_impedance.nodes.common import END_TOPIC, PROGRESS_TOPIC, header_stamp_ns, stamp_ns
 from hop_impedance.nodes.message_types import message_class
-from hop_impedance.nodes.qos import input_qos, latched_qos
+from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
 from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
 
 DEFAULT_TOPICS = [FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC]
@@ -70,6 +90,22 @@ class ReplayNode(Node):
         self.declare_parameter("wait_for_subscribers_s", 5.0, _desc("wait this long for subscribers before playing"))
         self.declare_parameter("reliable", True, _desc("publish sensor topics with reliable QoS"))
         self.declare_parameter("block_size", 200, _desc("with rate 0: wait for acknowledgement every N messages"))
+        self.declare_parameter("consumers", [""], _desc("nodes whose /pipeline/progress paces a rate-0 replay"))
+        self.declare_parameter("max_ahead_s", 0.5, _desc("rate 0 with consumers: run at most this far (recording s) ahead"))
+        self.declare_parameter("consumer_timeout_s", 2.0, _desc("leave out a consumer silent for this long (s)"))
+        self.consumers = [c for c in self.get_parameter("consumers").value if c]
+        self.max_ahead_ns = int(float(self.get_parameter("max_ahead_s").value) * 1e9)
+        self.consumer_timeout_s = float(self.get_parameter("consumer_timeout_s").value)
+        self.progress: dict[str, tuple[int, float]] = {}  # node -> (consumed stamp ns, wall time of report)
+        self.wait_s = 0.0
+        self.last_stamp_ns = 0
+        self._first_stamp_ns: int | None = None
+        self._progress_event = threading.Event()
+        from hop_impedance_msgs.msg import Progress
+        from std_msgs.msg import Header
+
+        self.create_subscription(Progress, PROGRESS_TOPIC, self._on_progress, result_qos(50))
+        self._end_pub = self.create_publisher(Header, END_TOPIC, latched_qos())
         self.path = self.get_parameter("recording").value
         if not self.path:
             raise ValueError("replay: parameter 'recording' is required")
@@ -120,6 +156,7 @@ class ReplayNode(Node):
                     break
                 shift += span
             self._drain()
+            self._publish_end()
         except (RecordingError, ValueError) as exc:
             self.error = str(exc)
             self.get_logger().error(self.error)
@@ -149,10 +186,16 @@ class ReplayNode(Node):
                 delay = due - time.monotonic()
                 if delay > 0:
                     time.sleep(delay)
-            pub.publish(data if not shift_ns else self._shifted(topic, data, shift_ns))
+            payload = data if not shift_ns else self._shifted(topic, data, shift_ns)
+            if topic != SUBJECT_TOPIC:
+                stamp = header_stamp_ns(payload)
+                self.last_stamp_ns = max(self.last_stamp_ns, stamp)
+                if self.rate == 0 and self.consumers:
+                    self._wait_for_consumers(stamp)
+            pub.publish(payload)
             self.published[topic] += 1
             n += 1
-            if self.rate == 0 and n % block == 0:
+            if self.rate == 0 and not self.consumers and n % block == 0:
                 self._drain()
         return 0 if first is None else (last - first) + 1_000_000
 
@@ -166,6 +209,41 @@ class ReplayNode(Node):
         for topic, pub in self._pubs.items():
             if topic != SUBJECT_TOPIC:
                 pub.wait_for_all_acked(Duration(seconds=5.0))
+
+    def _on_progress(self, msg) -> None:
+        if msg.node not in self.consumers:
+            return
+        played = [stamp_ns(s) for t, s in zip(msg.topics, msg.last_stamps) if t in self.topics and t != SUBJECT_TOPIC]
+        if played:
+            self.progress[msg.node] = (min(played), time.monotonic())
+            self._progress_event.set()
+
+    def _wait_for_consumers(self, stamp: int) -> None:
+        """Block until every live consumer has processed up to ``stamp - max_ahead_s``."""
+        if self._first_stamp_ns is None:
+            self._first_stamp_ns = stamp
+        t_wait = time.monotonic()
+        while not self._stop.is_set():
+            now = time.monotonic()
+            behind = []
+            for node in self.consumers:
+                consumed, seen = self.progress.get(node, (0, t_wait))
+                if now - seen > self.consumer_timeout_s:
+                    continue  # silent (crashed or never started): do not stall on it
+                if stamp - max(consumed, self._first_stamp_ns) > self.max_ahead_ns:
+                    behind.append(node)
+            if not behind:
+                break
+            self._progress_event.clear()
+            self._progress_event.wait(0.01)
+        self.wait_s += time.monotonic() - t_wait
+
+    def _publish_end(self) -> None:
+        from std_msgs.msg import Header
+
+        msg = Header(frame_id=str(self.path))
+        msg.stamp.sec, msg.stamp.nanosec = divmod(self.last_stamp_ns, 1_000_000_000)
+        self._end_pub.publish(msg)
 
     def stop(self) -> None:
         """Ask the playback thread to stop (returns at once)."""

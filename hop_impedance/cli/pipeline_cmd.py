@@ -1,0 +1,74 @@
+"""``hop-impedance pipeline --recording REC.mcap``: the ROS 2 node graph on a replayed recording.
+
+Starts replay, stance_detector, inverse_dynamics, impedance_estimator and
+recorder in one process (EventsExecutor) or, with ``--processes``, as
+separate processes; prints the per-stance table and losses; writes
+``OUT/pipeline.mcap`` (inputs and outputs). See docs/pipeline.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+
+def add_pipeline_arguments(p: argparse.ArgumentParser, default_recording: str | None = None) -> None:
+    """Options shared by ``pipeline`` and ``demo``."""
+    p.add_argument("--recording", required=default_recording is None, default=default_recording, help="MCAP recording to replay")
+    p.add_argument("--out", default="pipeline_out", help="folder for pipeline.mcap and logs [pipeline_out]")
+    p.add_argument("--rate", type=float, default=0.0, help="replay speed factor; 0 = as fast as the nodes take it without loss [0]")
+    p.add_argument("--processes", action="store_true", help="one OS process per node instead of one process")
+    p.add_argument("--low-latency", action="store_true", help="analyse each stance at take-off + 50 ms (docs/pipeline.md)")
+    p.add_argument("--no-frames", action="store_true", help="do not publish per-frame /joint_kinetics")
+    p.add_argument("--params-file", help="ROS 2 YAML parameter file (e.g. config/pipeline.yaml)")
+    p.add_argument("--timeout", type=float, default=120.0, help="give up after this many seconds [120]")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "pipeline",
+        help="run the ROS 2 node graph on a replayed recording",
+        description="Replay a recording through replay -> stance_detector, inverse_dynamics -> impedance_estimator "
+        "-> recorder and print one line per stance. DDS stays on this machine (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST).",
+    )
+    add_pipeline_arguments(p)
+    p.add_argument("--loop", action="store_true", help="replay in a loop (until --timeout)")
+    p.add_argument("--rerun", action="store_true", help="add the Rerun bridge node (if installed)")
+    p.set_defaults(func=run)
+
+
+def config_from_args(args: argparse.Namespace):
+    from hop_impedance.nodes.runner import PipelineConfig
+
+    return PipelineConfig(
+        recording=args.recording, out_dir=args.out, rate=args.rate, processes=args.processes,
+        low_latency=args.low_latency, publish_frames=not args.no_frames, rerun=getattr(args, "rerun", False),
+        timeout_s=args.timeout, params_file=args.params_file, loop=getattr(args, "loop", False),
+    )
+
+
+def print_report(report, recording: str) -> int:
+    """Print the table and the loss/diagnostic lines; return the exit code (0 when the run finished)."""
+    from hop_impedance.io.mcap_io import summarize
+    from hop_impedance.nodes.runner import loss_lines, stance_table
+
+    counts = {i.topic: i.count for i in summarize(recording)}
+    for line in stance_table(report):
+        print(line)
+    for line in loss_lines(report, counts):
+        print(line)
+    est = "/impedance_estimator"
+    print(f"fit p50/p99: {report.diag(est, 'fit_p50_ms', '?')}/{report.diag(est, 'fit_p99_ms', '?')} ms; "
+          f"take-off to profile p50/p99: {report.diag(est, 'takeoff_to_profile_p50_ms', '?')}/"
+          f"{report.diag(est, 'takeoff_to_profile_p99_ms', '?')} ms")
+    print(f"output: {report.output_mcap}  ({report.wall_s:.1f} s wall)")
+    if not report.finished:
+        print("pipeline did not finish in time (see the losses above and the logs)")
+        return 1
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    from hop_impedance.nodes.runner import run_pipeline
+
+    report = run_pipeline(config_from_args(args))
+    return print_report(report, args.recording)

@@ -1,0 +1,294 @@
+"""Shared pieces of the pipeline nodes: parameters, stamps, input bookkeeping, diagnostics, progress.
+
+Topic names of the pipeline (inputs follow shared/contract/RECORDINGS.md):
+
+=============================  ==========================================  =====================
+topic                          type                                        publisher
+=============================  ==========================================  =====================
+``/stance/events``             ``hop_impedance_msgs/msg/StanceEvent``      stance_detector
+``/stance/kinetics``           ``hop_impedance_msgs/msg/StanceKinetics``   inverse_dynamics
+``/joint_kinetics``            ``hop_impedance_msgs/msg/JointKinetics``    inverse_dynamics
+``/impedance/profile``         ``hop_impedance_msgs/msg/ImpedanceProfile`` impedance_estimator
+``/impedance/stance_summary``  ``hop_impedance_msgs/msg/StanceSummary``    impedance_estimator
+``/impedance/controller``      ``hop_impedance_msgs/msg/ControllerImpedance`` impedance_estimator
+``/pipeline/progress``         ``hop_impedance_msgs/msg/Progress``         every input consumer
+``/replay/end_of_stream``      ``std_msgs/msg/Header``                     replay
+``/diagnostics``               ``diagnostic_msgs/msg/DiagnosticArray``     every node
+=============================  ==========================================  =====================
+"""
+
+from __future__ import annotations
+
+import struct
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.node import Node
+
+from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
+
+EVENTS_TOPIC = "/stance/events"
+STANCE_KINETICS_TOPIC = "/stance/kinetics"
+JOINT_KINETICS_TOPIC = "/joint_kinetics"
+PROFILE_TOPIC = "/impedance/profile"
+SUMMARY_TOPIC = "/impedance/stance_summary"
+CONTROLLER_TOPIC = "/impedance/controller"
+PROGRESS_TOPIC = "/pipeline/progress"
+END_TOPIC = "/replay/end_of_stream"
+DIAGNOSTICS_TOPIC = "/diagnostics"
+
+#: Every topic of the pipeline and its type (``pkg/msg/Type``), inputs first.
+TOPIC_TYPES: dict[str, str] = {
+    FORCE_TOPIC: "geometry_msgs/msg/WrenchStamped",
+    MARKER_TOPIC: "hop_impedance_msgs/msg/MarkerArray",
+    SUBJECT_TOPIC: "hop_impedance_msgs/msg/SubjectInfo",
+    EVENTS_TOPIC: "hop_impedance_msgs/msg/StanceEvent",
+    STANCE_KINETICS_TOPIC: "hop_impedance_msgs/msg/StanceKinetics",
+    JOINT_KINETICS_TOPIC: "hop_impedance_msgs/msg/JointKinetics",
+    PROFILE_TOPIC: "hop_impedance_msgs/msg/ImpedanceProfile",
+    SUMMARY_TOPIC: "hop_impedance_msgs/msg/StanceSummary",
+    CONTROLLER_TOPIC: "hop_impedance_msgs/msg/ControllerImpedance",
+    DIAGNOSTICS_TOPIC: "diagnostic_msgs/msg/DiagnosticArray",
+}
+
+#: Topics the pipeline produces (what the recorder writes next to the inputs).
+OUTPUT_TOPICS: tuple[str, ...] = (
+    EVENTS_TOPIC, STANCE_KINETICS_TOPIC, JOINT_KINETICS_TOPIC, PROFILE_TOPIC, SUMMARY_TOPIC,
+    CONTROLLER_TOPIC, DIAGNOSTICS_TOPIC,
+)
+
+
+def declare(node: Node, name: str, default, description: str):
+    """Declare a parameter with a description and return its value."""
+    return node.declare_parameter(name, default, ParameterDescriptor(description=description)).value
+
+
+def stamp_ns(stamp) -> int:
+    """``builtin_interfaces/Time`` -> integer ns."""
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+def header_stamp_ns(cdr: bytes) -> int:
+    """``header.stamp`` (ns) of a CDR-serialised message that starts with ``std_msgs/Header``.
+
+    Layout: 4-byte encapsulation (``00 01`` = little endian), then int32 sec,
+    uint32 nanosec.
+    """
+    little = cdr[1] == 1
+    sec, nsec = struct.unpack_from("<iI" if little else ">iI", cdr, 4)
+    return sec * 1_000_000_000 + nsec
+
+
+def set_stamp(stamp, ns: int) -> None:
+    """Write integer ns into a ``builtin_interfaces/Time`` (sec, nanosec)."""
+    stamp.sec, stamp.nanosec = divmod(int(ns), 1_000_000_000)
+
+
+def seconds_to_ns(t0_ns: int, t_s: float) -> int:
+    """Stage time (s since ``t0_ns``) -> stamp ns."""
+    return int(t0_ns + round(t_s * 1e9))
+
+
+@dataclass
+class InputTracker:
+    """Counts what arrived on one input topic: messages, losses, order, rate.
+
+    Losses are inferred from the stamps: a step of more than 1.5 nominal
+    periods between consecutive stamps counts ``round(step / period) - 1``
+    lost messages (the nominal period is the median of the first 50 steps).
+    A stamp older than the newest one already seen is *late* (out of order).
+    """
+
+    topic: str
+    received: int = 0
+    lost: int = 0
+    late: int = 0
+    newest_ns: int | None = None
+    first_wall: float | None = None
+    last_wall: float | None = None
+    _steps: list[int] = field(default_factory=list, repr=False)
+
+    def note(self, ns: int) -> bool:
+        """Record a stamp (ns); returns False when it is late (older than the newest)."""
+        now = time.monotonic()
+        self.first_wall = self.first_wall or now
+        self.last_wall = now
+        self.received += 1
+        if self.newest_ns is not None and ns <= self.newest_ns:
+            self.late += 1
+            return False
+        if self.newest_ns is not None:
+            step = ns - self.newest_ns
+            if len(self._steps) < 50:
+                self._steps.append(step)
+            period = float(np.median(self._steps))
+            if step > 1.5 * period:
+                self.lost += int(round(step / period)) - 1
+        self.newest_ns = ns
+        return True
+
+    @property
+    def rate_hz(self) -> float:
+        """Mean arrival rate (messages per wall-clock second)."""
+        if self.first_wall is None or self.last_wall is None or self.last_wall <= self.first_wall:
+            return 0.0
+        return (self.received - 1) / (self.last_wall - self.first_wall)
+
+
+class ReorderBuffer:
+    """Holds stamped items for ``window_ns`` of stamp time so out-of-order arrivals are sorted.
+
+    ``add`` returns False (and counts ``dropped``) for an item older than the
+    last released one: it arrived too late to be used in order.
+    """
+
+    def __init__(self, window_ns: int) -> None:
+        self.window_ns = int(window_ns)
+        self.items: list[tuple[int, object]] = []
+        self.released_ns: int | None = None
+        self.dropped = 0
+
+    def add(self, ns: int, item) -> bool:
+        if self.released_ns is not None and ns <= self.released_ns:
+            self.dropped += 1
+            return False
+        self.items.append((ns, item))
+        return True
+
+    def release(self, everything: bool = False) -> list[tuple[int, object]]:
+        """Items older than newest - window (all with ``everything``), in stamp order."""
+        if not self.items:
+            return []
+        self.items.sort(key=lambda x: x[0])
+        limit = self.items[-1][0] if everything else self.items[-1][0] - self.window_ns
+        n = 0
+        while n < len(self.items) and self.items[n][0] <= limit:
+            n += 1
+        out, self.items = self.items[:n], self.items[n:]
+        if out:
+            self.released_ns = out[-1][0]
+        return out
+
+
+def percentile_ms(values: list[float], q: float) -> float:
+    """q-th percentile of seconds, in ms (NaN when empty)."""
+    return float(np.percentile(values, q) * 1e3) if values else float("nan")
+
+
+class Diagnostics:
+    """Publishes one ``DiagnosticStatus`` per node on ``/diagnostics`` every ``period_s``.
+
+    ``values`` is a callable returning ``{key: value}``; ``level`` one
+    returning ``(level, message)``. The header stamp is the newest input
+    sample stamp the node processed (the sample clock), so a recorded
+    session keeps diagnostics next to the data they describe.
+    """
+
+    def __init__(self, node: Node, period_s: float, values, level=None) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
+
+        self.node = node
+        self.values = values
+        self.level = level or (lambda: (0, "ok"))
+        self.sample_ns = 0
+        self.pub = node.create_publisher(DiagnosticArray, DIAGNOSTICS_TOPIC, 10)
+        self.timer = node.create_timer(period_s, self.publish) if period_s > 0 else None
+
+    def publish(self) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+        arr = DiagnosticArray()
+        set_stamp(arr.header.stamp, self.sample_ns)
+        level, message = self.level()
+        status = DiagnosticStatus(level=bytes([level]), name=self.node.get_fully_qualified_name(),
+                                  message=message, hardware_id="hop_impedance")
+        status.values = [KeyValue(key=k, value=_fmt(v)) for k, v in self.values().items()]
+        arr.status = [status]
+        self.pub.publish(arr)
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+class ProgressReporter:
+    """Publishes the node's consumed stamps on ``/pipeline/progress`` (flow control of the replay).
+
+    Published at most every ``period_s`` and only when something changed,
+    plus at once on :meth:`publish` (e.g. after a flush).
+    """
+
+    def __init__(self, node: Node, trackers: dict[str, InputTracker], period_s: float = 0.01) -> None:
+        from hop_impedance.nodes.qos import result_qos
+        from hop_impedance_msgs.msg import Progress
+
+        self.node = node
+        self.trackers = trackers
+        self.processed_ns: dict[str, int] = {}
+        self.finished = False
+        self.stances_out = 0
+        self._last_sent: tuple | None = None
+        self.pub = node.create_publisher(Progress, PROGRESS_TOPIC, result_qos(50))
+        self.timer = node.create_timer(period_s, self._tick)
+
+    def _state(self) -> tuple:
+        return (tuple(sorted(self.processed_ns.items())), self.finished, self.stances_out,
+                tuple(t.received for t in self.trackers.values()))
+
+    def _tick(self) -> None:
+        if self._state() != self._last_sent:
+            self.publish()
+
+    def publish(self) -> None:
+        from builtin_interfaces.msg import Time
+
+        from hop_impedance_msgs.msg import Progress
+
+        msg = Progress(node=self.node.get_fully_qualified_name(), finished=self.finished, stances_out=self.stances_out)
+        set_stamp(msg.header.stamp, time.time_ns())
+        msg.topics = list(self.trackers)
+        stamps = []
+        for topic in self.trackers:
+            t = Time()
+            set_stamp(t, self.processed_ns.get(topic, 0))
+            stamps.append(t)
+        msg.last_stamps = stamps
+        msg.received = [t.received for t in self.trackers.values()]
+        self._last_sent = self._state()
+        self.pub.publish(msg)
+
+
+def spin_node(node_factory, args=None) -> None:
+    """``main()`` body shared by the nodes: init, build, spin, exit quietly on Ctrl-C / shutdown.
+
+    Uses the EventsExecutor (measured several times faster than the
+    Single/MultiThreadedExecutor on this rclpy; docs/pipeline.md).
+    """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    with rclpy.init(args=args):
+        try:
+            node = node_factory()
+            executor = make_executor()
+            executor.add_node(node)
+            executor.spin()
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+
+
+def make_executor(kind: str = "events"):
+    """``"events"`` (rclpy.experimental.EventsExecutor) or ``"single"`` (SingleThreadedExecutor)."""
+    if kind == "events":
+        from rclpy.experimental import EventsExecutor
+
+        return EventsExecutor()
+    if kind == "single":
+        from rclpy.executors import SingleThreadedExecutor
+
+        return SingleThreadedExecutor()
+    raise ValueError(f"executor must be 'events' or 'single', got {kind!r}")

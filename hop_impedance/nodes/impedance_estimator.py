@@ -1,0 +1,216 @@
+"""``impedance_estimator``: one impedance fit per joint per stance, and the controller feed.
+
+Subscribes ``/stance/kinetics`` (one message per stance from
+``inverse_dynamics``), fits the seed paper's model to ankle, knee and hip with
+:func:`hop_impedance.impedance.recording_fits.fit_stance_joints` (the same
+call, options and warm-started OSQP workspaces as ``hop-impedance analyze``)
+and publishes, per stance:
+
+- three ``ImpedanceProfile`` on ``/impedance/profile`` (reliable): accepted
+  with coefficients and fit statistics, or ``accepted = false`` with the
+  rejection reason;
+- one ``StanceSummary`` on ``/impedance/stance_summary`` (reliable);
+- one ``ControllerImpedance`` on ``/impedance/controller`` (reliable,
+  transient-local depth 1: a controller that starts late gets the latest
+  values at once). See docs/pipeline.md for how a controller uses it.
+
+``latency_s`` of a profile = wall-clock now minus the arrival of the first
+force sample at or after take-off at ``inverse_dynamics``
+(``StanceKinetics.takeoff_received_ns``); both nodes run on one machine.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from rclpy.node import Node
+
+from hop_impedance.biomech.joint_angles import JOINT_NAMES
+from hop_impedance.biomech.stages import equivalent_linear_impedance
+from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares
+from hop_impedance.impedance.recording_fits import default_fit_options, fit_stance_joints
+from hop_impedance.impedance.stance_fit import JointImpedanceFit
+from hop_impedance.nodes.common import (
+    CONTROLLER_TOPIC, PROFILE_TOPIC, STANCE_KINETICS_TOPIC, SUMMARY_TOPIC, Diagnostics, declare, percentile_ms,
+    set_stamp, stamp_ns,
+)
+from hop_impedance.nodes.inverse_dynamics import stance_from_message
+from hop_impedance.nodes.qos import latched_qos, result_qos
+from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, StanceSummary
+
+
+class ImpedanceEstimatorNode(Node):
+    """Fits each stance and publishes profiles, summary and controller feed; see the module docstring."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("impedance_estimator", **kwargs)
+        diag = declare(self, "diagnostics_period_s", 1.0, "publish /diagnostics this often (s); 0 = never")
+        cutoff = declare(self, "cutoff_hz", 12.0, "low-pass cut-off the joint data were filtered with (Hz): the fit's noise bandwidth")
+        from hop_impedance.biomech.analysis import AnalysisOptions
+
+        self.options = default_fit_options(AnalysisOptions(marker_cutoff_hz=cutoff, force_cutoff_hz=cutoff))
+        self.solvers: dict[str, ConstrainedLeastSquares] = {}
+        self.fit_s: list[float] = []
+        self.latency_s: list[float] = []
+        self.stances_in = 0
+        self.accepted = np.zeros(3, int)
+        self.rejected = np.zeros(3, int)
+        self.feed = _empty_feed()
+        self.pub_profile = self.create_publisher(ImpedanceProfile, PROFILE_TOPIC, result_qos())
+        self.pub_summary = self.create_publisher(StanceSummary, SUMMARY_TOPIC, result_qos())
+        self.pub_feed = self.create_publisher(ControllerImpedance, CONTROLLER_TOPIC, latched_qos())
+        self.create_subscription(StanceKinetics, STANCE_KINETICS_TOPIC, self._on_stance, result_qos())
+        self.diagnostics = Diagnostics(self, diag, self._diag_values)
+
+    def _on_stance(self, msg: StanceKinetics) -> None:
+        t_start = time.perf_counter()
+        self.stances_in += 1
+        stance = stance_from_message(msg)
+        fits = fit_stance_joints(stance, self.options, self.solvers)
+        self.fit_s.append(time.perf_counter() - t_start)
+        latency = (time.time_ns() - msg.takeoff_received_ns) * 1e-9 if msg.takeoff_received_ns else math.nan
+        if math.isfinite(latency):
+            self.latency_s.append(latency)
+        for j, name in enumerate(JOINT_NAMES):
+            self.pub_profile.publish(profile_message(msg, name, fits[name], latency))
+            if fits[name].ok:
+                self.accepted[j] += 1
+            else:
+                self.rejected[j] += 1
+        self.pub_summary.publish(summary_message(msg, fits))
+        if any(f.ok for f in fits.values()):
+            update_feed(self.feed, msg, stance, fits)
+            self.pub_feed.publish(self.feed)
+        self.diagnostics.sample_ns = stamp_ns(msg.header.stamp)
+
+    def _diag_values(self) -> dict:
+        out = {"stances_received": self.stances_in,
+               "fit_p50_ms": percentile_ms(self.fit_s, 50), "fit_p99_ms": percentile_ms(self.fit_s, 99),
+               "takeoff_to_profile_p50_ms": percentile_ms(self.latency_s, 50),
+               "takeoff_to_profile_p99_ms": percentile_ms(self.latency_s, 99)}
+        for j, name in enumerate(JOINT_NAMES):
+            out[f"{name}_accepted"] = int(self.accepted[j])
+            out[f"{name}_rejected"] = int(self.rejected[j])
+        return out
+
+
+def _c(fit: JointImpedanceFit, name: str) -> float:
+    """Coefficient ``name`` of a fit; 0 for a term removed by the reduction, NaN for a rejected fit."""
+    if not fit.ok:
+        return math.nan
+    return float(fit.coefficients.get(name, 0.0))
+
+
+def _f(x) -> float:
+    return math.nan if x is None else float(x)
+
+
+def profile_message(stance: StanceKinetics, joint: str, fit: JointImpedanceFit, latency_s: float) -> ImpedanceProfile:
+    """One joint's fit as an ``ImpedanceProfile`` (rejection: ``accepted`` false with the reason)."""
+    msg = ImpedanceProfile(stance_index=stance.stance_index, joint=joint, accepted=fit.ok,
+                           rejection_reason=fit.rejection_reason or "", solver_status=fit.status)
+    msg.header = stance.header
+    msg.touchdown_stamp, msg.takeoff_stamp = stance.touchdown_stamp, stance.takeoff_stamp
+    msg.latency_s = float(latency_s)
+    if fit.reduction is not None or fit.terms:
+        msg.terms = list(fit.terms)
+        msg.coefficients = [_f(fit.coefficients.get(t)) for t in fit.terms]
+        msg.std_errors = [_f(fit.std_errors.get(t)) for t in fit.terms]
+        msg.p_values = [_f(fit.p_values.get(t)) for t in fit.terms]
+    msg.rho0_rad, msg.omega0_rad_s = _f(fit.rho0), _f(fit.omega0)
+    msg.moment0_nm = float(fit.moment_nm[0]) if fit.moment_nm.size else math.nan
+    if fit.ok:
+        msg.time_s = np.asarray(fit.time_s, float)
+        msg.angle_rad = np.asarray(fit.angle_rad, float)
+        msg.stiffness_nm_per_rad = np.asarray(fit.stiffness, float)
+        msg.damping_nms_per_rad = np.asarray(fit.damping, float)
+        msg.moment_measured_nm = np.asarray(fit.moment_nm, float)
+        msg.moment_fit_nm = np.asarray(fit.moment_fit, float)
+    msg.rmse_nm, msg.r_squared = float(fit.rmse), float(fit.r_squared)
+    msg.sse_variable, msg.sse_constant = float(fit.sse_variable), float(fit.sse_constant)
+    msg.table3_error_variable, msg.table3_error_constant = float(fit.table3_variable), float(fit.table3_constant)
+    msg.overall_stiffness_nm_per_rad = float(fit.overall_stiffness)
+    msg.average_stiffness_nm_per_rad = float(fit.average_stiffness)
+    msg.constant_stiffness_nm_per_rad = float(fit.overall_stiffness)
+    msg.initial_stiffness_nm_per_rad = fit.initial_stiffness
+    msg.max_stiffness_nm_per_rad = fit.max_stiffness
+    if fit.diagnostics is not None:
+        d = fit.diagnostics
+        with np.errstate(over="ignore"):
+            msg.hessian_determinant = float(np.power(10.0, d.hessian_log10_determinant))
+        msg.eigenvalue_ratio = float(d.hessian_eigenvalue_ratio)
+        msg.vif_terms = list(d.terms)
+        msg.vif = np.asarray(d.variance_inflation_factors, float)
+    return msg
+
+
+def summary_message(stance: StanceKinetics, fits: dict[str, JointImpedanceFit]) -> StanceSummary:
+    """The per-stance line: events, global measures and each joint's k0, k1, R^2."""
+    msg = StanceSummary(stance_index=stance.stance_index, complete=stance.complete,
+                        rejection_reason=stance.rejection_reason)
+    msg.header = stance.header
+    msg.touchdown_stamp, msg.takeoff_stamp = stance.touchdown_stamp, stance.takeoff_stamp
+    for name in ("contact_time_s", "peak_grf_n", "peak_grf_bw", "hop_frequency_hz", "leg_stiffness_n_per_m", "hip_excursion_m"):
+        setattr(msg, name, getattr(stance, name))
+    msg.flight_time_before_s = stance.flight_time_before_s
+    ordered = [fits[n] for n in JOINT_NAMES]
+    msg.k0 = [_c(f, "k0") for f in ordered]
+    msg.k1 = [_c(f, "k1") for f in ordered]
+    msg.r_squared = [float(f.r_squared) if f.ok else math.nan for f in ordered]
+    msg.accepted = [f.ok for f in ordered]
+    if not msg.rejection_reason and not all(msg.accepted):
+        msg.rejection_reason = "; ".join(f"{n}: {fits[n].rejection_reason}" for n in JOINT_NAMES if not fits[n].ok)
+    return msg
+
+
+def _empty_feed() -> ControllerImpedance:
+    msg = ControllerImpedance()
+    for name in ("k0_nm_per_rad", "k1_nm_per_rad2", "b0_nms_per_rad", "rho0_rad", "omega0_rad_s", "tau0_nm",
+                 "stiffness_eq_nm_per_rad", "damping_eq_nms_per_rad", "equilibrium_angle_rad"):
+        setattr(msg, name, [math.nan] * 3)
+    msg.valid = [False] * 3
+    return msg
+
+
+def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result, fits: dict[str, JointImpedanceFit]) -> None:
+    """Overwrite the accepted joints' entries of the controller feed with this stance's values.
+
+    ``tau0`` is the fitted moment at touchdown (``m0``, 0 if reduced away);
+    the equivalent linear impedance comes from
+    :func:`stages.equivalent_linear_impedance` on the measured moment.
+    Rejected joints keep their previous values and get ``valid = false``.
+    """
+    feed.header = stance.header
+    feed.stance_index = stance.stance_index
+    arrays = {n: list(getattr(feed, n)) for n in (
+        "k0_nm_per_rad", "k1_nm_per_rad2", "b0_nms_per_rad", "rho0_rad", "omega0_rad_s", "tau0_nm",
+        "stiffness_eq_nm_per_rad", "damping_eq_nms_per_rad", "equilibrium_angle_rad")}
+    valid = list(feed.valid)
+    for j, name in enumerate(JOINT_NAMES):
+        fit = fits[name]
+        valid[j] = fit.ok
+        if not fit.ok:
+            continue
+        data = stance_result.joints.joint(name)
+        k_eq, b_eq, theta_eq = equivalent_linear_impedance(data["angle_rad"], data["angular_velocity_rad_s"], data["moment_nm"])
+        values = {"k0_nm_per_rad": _c(fit, "k0"), "k1_nm_per_rad2": _c(fit, "k1"), "b0_nms_per_rad": _c(fit, "b0"),
+                  "rho0_rad": float(fit.rho0), "omega0_rad_s": float(fit.omega0), "tau0_nm": _c(fit, "m0"),
+                  "stiffness_eq_nm_per_rad": k_eq, "damping_eq_nms_per_rad": b_eq, "equilibrium_angle_rad": theta_eq}
+        for key, v in values.items():
+            arrays[key][j] = v
+    for key, v in arrays.items():
+        setattr(feed, key, v)
+    feed.valid = valid
+
+
+def main(args=None) -> None:
+    """Run the node (``python -m hop_impedance.nodes.impedance_estimator --ros-args -p ...``)."""
+    from hop_impedance.nodes.common import spin_node
+
+    spin_node(ImpedanceEstimatorNode, args)
+
+
+if __name__ == "__main__":
+    main()

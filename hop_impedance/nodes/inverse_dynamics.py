@@ -1,0 +1,345 @@
+"""``inverse_dynamics``: synchronise force plate and markers, per-stance and per-frame joint kinetics.
+
+Thin adapter around :class:`hop_impedance.biomech.stages.StanceAnalysisStage`:
+
+- ``/subject`` (transient-local) gives mass, height; the body model is scaled
+  from the first ``calibration_s`` of marker frames in which all markers are
+  visible (the offline analysis uses the whole recording; the two models
+  differ by ~1e-4 in segment lengths on the bundled recordings).
+- Force (1 kHz) and markers (100 Hz) arrive at different rates, with jitter,
+  loss and possibly out of order. Each stream goes through a reorder buffer
+  (``reorder_window_s`` of stamp time); the stage itself waits until both
+  streams cover a stance's window (markers one frame beyond), which is the
+  synchronisation. Counted per topic: received, lost (stamp gaps), out of
+  order, too late to use. ``sync_residual_s`` on /diagnostics is the newest
+  force stamp minus the newest marker stamp.
+- A stance with missing samples is published with a rejection reason
+  (stages.missing_samples_reason), never analysed on incomplete data.
+- Output per stance: ``StanceKinetics`` on ``/stance/kinetics`` (whole
+  stance, reliable) and, if ``publish_frames``, one ``JointKinetics`` per
+  force frame of the stance on ``/joint_kinetics`` (published after the
+  analysis of the stance, since the zero-lag filters need the whole window).
+- ``low_latency`` selects the stage's low-latency mode (window ends
+  ``post_pad_s`` after take-off); default false = results equal to
+  ``hop-impedance analyze``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from geometry_msgs.msg import WrenchStamped
+from rclpy.node import Node
+from std_msgs.msg import Header
+
+from hop_impedance.biomech.analysis import AnalysisOptions, StanceResult
+from hop_impedance.biomech.kinematics import body_model_from_markers
+from hop_impedance.biomech.stages import StanceAnalysisStage
+from hop_impedance.nodes.common import (
+    END_TOPIC, JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC, Diagnostics, InputTracker, ProgressReporter,
+    ReorderBuffer, declare, seconds_to_ns, set_stamp, stamp_ns,
+)
+from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
+from hop_impedance.recording import FORCE_TOPIC, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, MarkerSeries, Subject
+from hop_impedance_msgs.msg import JointKinetics, MarkerArray, StanceKinetics, SubjectInfo
+
+
+class InverseDynamicsNode(Node):
+    """Per-stance inverse dynamics from streamed force and markers; see the module docstring."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("inverse_dynamics", **kwargs)
+        reliable = declare(self, "reliable_inputs", True, "match reliable publishers (replay, many mocap drivers); false = sensor-data best effort")
+        reorder_s = declare(self, "reorder_window_s", 0.02, "hold samples this long (stamp time, s) to sort out-of-order arrivals")
+        period = declare(self, "process_period_s", 0.005, "run the stage on the buffered samples this often (s)")
+        diag = declare(self, "diagnostics_period_s", 1.0, "publish /diagnostics this often (s); 0 = never")
+        self.calibration_s = declare(self, "calibration_s", 1.0, "scale the body model from the first this many seconds of complete marker frames")
+        self.publish_frames = declare(self, "publish_frames", True, "publish per-frame JointKinetics of each analysed stance")
+        self.sex = declare(self, "sex", "female", "de Leva table: female or male (not in SubjectInfo)")
+        low_latency = declare(self, "low_latency", False, "analyse at take-off + post_pad_s instead of at the next touchdown")
+        post_pad = declare(self, "post_pad_s", 0.05, "low-latency mode: data used after take-off (s)")
+        cutoff = declare(self, "cutoff_hz", 12.0, "low-pass cut-off of markers and forces (Hz)")
+        max_gap = declare(self, "max_gap_s", 0.05, "longest marker gap filled by interpolation (s)")
+        self.options = AnalysisOptions(marker_cutoff_hz=cutoff, force_cutoff_hz=cutoff, max_gap_s=max_gap)
+        self.post_pad_s = post_pad if low_latency else None
+        self.subject: Subject | None = None
+        self.stage: StanceAnalysisStage | None = None
+        self.t0_ns: int | None = None
+        self.calib: list[tuple[int, np.ndarray]] = []
+        self.force_buf = ReorderBuffer(int(reorder_s * 1e9))
+        self.marker_buf = ReorderBuffer(int(reorder_s * 1e9))
+        self.pending_force: list[tuple[int, object]] = []  # released, waiting for the body model
+        self.pending_markers: list[tuple[int, object]] = []
+        self.arrivals = np.zeros((0, 2), np.int64)  # (stamp ns, wall arrival ns) of recent force samples
+        self._arrivals_new: list[tuple[int, int]] = []
+        self.trackers = {FORCE_TOPIC: InputTracker(FORCE_TOPIC), MARKER_TOPIC: InputTracker(MARKER_TOPIC)}
+        self.stances_out = 0
+        self.rejected = 0
+        self.analysis_s: list[float] = []
+        self.pub_stance = self.create_publisher(StanceKinetics, STANCE_KINETICS_TOPIC, result_qos())
+        self.pub_frames = self.create_publisher(JointKinetics, JOINT_KINETICS_TOPIC, result_qos(2000))
+        self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
+        self.create_subscription(WrenchStamped, FORCE_TOPIC, self._on_wrench, input_qos(reliable))
+        self.create_subscription(MarkerArray, MARKER_TOPIC, self._on_markers, input_qos(reliable))
+        self.create_subscription(Header, END_TOPIC, self._on_end, latched_qos())
+        self.progress = ProgressReporter(self, self.trackers)
+        self.diagnostics = Diagnostics(self, diag, self._diag_values, self._diag_level)
+        self.end_timeout_s = declare(self, "end_timeout_s", 3.0, "after end-of-stream, wait this long (s) for missing data")
+        self._end: tuple[int, float] | None = None
+        self.create_timer(period, self._tick)
+
+    # -- callbacks: message -> arrays ------------------------------------------
+
+    def _on_subject(self, msg: SubjectInfo) -> None:
+        self.subject = Subject(msg.subject_id, float(msg.body_mass), float(msg.body_height), self.sex)
+
+    def _on_wrench(self, msg: WrenchStamped) -> None:
+        ns = stamp_ns(msg.header.stamp)
+        self.trackers[FORCE_TOPIC].note(ns)
+        f, m = msg.wrench.force, msg.wrench.torque
+        if self.force_buf.add(ns, (f.x, f.z, -m.y)):  # sagittal [Fx, Fz, Mo] (force_plate.sagittal_wrench)
+            self._arrivals_new.append((ns, time.time_ns()))
+
+    def _on_markers(self, msg: MarkerArray) -> None:
+        ns = stamp_ns(msg.header.stamp)
+        self.trackers[MARKER_TOPIC].note(ns)
+        names = list(msg.names)
+        xz = np.full((len(MARKER_NAMES), 2), np.nan)
+        for i, name in enumerate(MARKER_NAMES):
+            if name in names:
+                p = msg.positions[names.index(name)]
+                xz[i] = (p.x, p.z)
+        self.marker_buf.add(ns, xz)
+
+    def _on_end(self, msg: Header) -> None:
+        """End of a replayed stream: finish once data up to its stamp are in (or after ``end_timeout_s``)."""
+        self._end = (stamp_ns(msg.stamp), time.monotonic() + self.end_timeout_s)
+
+    def _check_end(self) -> None:
+        if self._end is None or self.progress.finished:
+            return
+        end_ns, deadline = self._end
+        newest = max((t.newest_ns or 0) for t in list(self.trackers.values()))
+        if newest >= end_ns or time.monotonic() > deadline:
+            self._finish()
+
+    def _finish(self) -> None:
+        """End of a replayed stream: analyse what remains (the last stance) and report finished."""
+        self.process(everything=True)
+        if self.stage is None and self.subject is not None and self.calib:
+            self._start_stage(force_model=True)
+            self.process(everything=True)
+        if self.stage is not None:
+            for res in self.stage.flush():
+                self._publish(res)
+        self.progress.finished = True
+        self.progress.stances_out = self.stances_out
+        self.progress.publish()
+
+    # -- processing ------------------------------------------------------------
+
+    def _tick(self) -> None:
+        self.process()
+        self._check_end()
+
+    def process(self, everything: bool = False) -> None:
+        """Release reordered samples, calibrate once, push to the stage, publish finished stances."""
+        forces = self.force_buf.release(everything)
+        markers = self.marker_buf.release(everything)
+        if self._arrivals_new:
+            self.arrivals = np.concatenate([self.arrivals[-5000:], np.array(self._arrivals_new, np.int64)])
+            self._arrivals_new = []
+        if not forces and not markers:
+            return
+        if self.t0_ns is None:
+            self.t0_ns = min(x[0][0] for x in (forces, markers) if x)
+        if self.stage is None:
+            self.pending_force += forces
+            self.pending_markers += markers
+            self.calib += [m for m in markers if np.all(np.isfinite(m[1]))]
+            self._start_stage()
+            if self.stage is None:
+                self._bound_pending()
+                self._note_processed(forces, markers)
+                return
+            forces, markers = self.pending_force, self.pending_markers
+            self.pending_force, self.pending_markers = [], []
+        t_start = time.perf_counter()
+        results = self.stage.push(self._force_arrays(forces), self._marker_arrays(markers))
+        if results:
+            self.analysis_s.append(time.perf_counter() - t_start)
+        for res in results:
+            self._publish(res)
+        self._note_processed(forces, markers)
+
+    def _note_processed(self, forces, markers) -> None:
+        for topic, items in ((FORCE_TOPIC, forces), (MARKER_TOPIC, markers)):
+            if items:
+                self.progress.processed_ns[topic] = int(items[-1][0])
+        self.progress.stances_out = self.stances_out
+        if forces:
+            self.diagnostics.sample_ns = int(forces[-1][0])
+
+    def _start_stage(self, force_model: bool = False) -> None:
+        """Scale the body model once the subject and ``calibration_s`` of marker frames are in."""
+        if self.subject is None or not self.calib:
+            return
+        span_s = (self.calib[-1][0] - self.calib[0][0]) * 1e-9
+        if span_s < self.calibration_s and not force_model:
+            return
+        stamps = np.array([c[0] for c in self.calib], np.int64)
+        xz = np.stack([c[1] for c in self.calib])
+        positions = np.zeros(xz.shape[:2] + (3,))
+        positions[:, :, 0], positions[:, :, 2] = xz[:, :, 0], xz[:, :, 1]
+        try:
+            model = body_model_from_markers(self.subject, MarkerSeries(stamps, MARKER_NAMES, positions))
+        except ValueError as exc:
+            self.get_logger().error(f"body model: {exc}")
+            return
+        self.stage = StanceAnalysisStage(model, self.subject.body_mass_kg, self.options, self.post_pad_s)
+        self.calib = []
+        self.get_logger().info(f"body model scaled from {len(stamps)} marker frames ({span_s:.2f} s)")
+
+    def _bound_pending(self, max_s: float = 30.0) -> None:
+        """Without a subject, keep at most ``max_s`` of data (older samples are counted as lost)."""
+        if self.pending_force and (self.pending_force[-1][0] - self.pending_force[0][0]) * 1e-9 > max_s:
+            self.get_logger().warning(f"no {SUBJECT_TOPIC} yet: keeping only the last {max_s:.0f} s of data")
+            cut = self.pending_force[-1][0] - int(max_s * 1e9)
+            self.pending_force = [x for x in self.pending_force if x[0] >= cut]
+            self.pending_markers = [x for x in self.pending_markers if x[0] >= cut]
+
+    def _force_arrays(self, items):
+        if not items:
+            return None
+        ns = np.fromiter((i[0] for i in items), np.int64, len(items))
+        return (ns - self.t0_ns) * 1e-9, np.array([i[1] for i in items], float)
+
+    def _marker_arrays(self, items):
+        if not items:
+            return None
+        ns = np.fromiter((i[0] for i in items), np.int64, len(items))
+        return (ns - self.t0_ns) * 1e-9, np.stack([i[1] for i in items])
+
+    # -- arrays -> messages ----------------------------------------------------
+
+    def _takeoff_arrival_ns(self, takeoff_ns: int) -> int:
+        """Wall-clock arrival of the first force sample at or after take-off (0 if unknown)."""
+        idx = np.searchsorted(self.arrivals[:, 0], takeoff_ns) if len(self.arrivals) else 0
+        return int(self.arrivals[idx, 1]) if idx < len(self.arrivals) else 0
+
+    def _publish(self, res: StanceResult) -> None:
+        msg = stance_message(res, self.t0_ns)
+        msg.takeoff_received_ns = self._takeoff_arrival_ns(stamp_ns(msg.takeoff_stamp))
+        self.pub_stance.publish(msg)
+        self.stances_out += 1
+        self.rejected += res.rejection_reason is not None
+        if self.publish_frames and res.joints is not None:
+            for frame in frame_messages(res, self.t0_ns):
+                self.pub_frames.publish(frame)
+
+    def _diag_values(self) -> dict:
+        out = {}
+        for topic, t in self.trackers.items():
+            name = "force" if topic == FORCE_TOPIC else "markers"
+            out |= {f"{name}_received": t.received, f"{name}_rate_hz": t.rate_hz, f"{name}_lost": t.lost,
+                    f"{name}_out_of_order": t.late}
+        out["force_late_dropped"] = self.force_buf.dropped
+        out["markers_late_dropped"] = self.marker_buf.dropped
+        f, m = (self.trackers[k].newest_ns for k in (FORCE_TOPIC, MARKER_TOPIC))
+        out["sync_residual_s"] = (f - m) * 1e-9 if f is not None and m is not None else math.nan
+        out["stances_published"] = self.stances_out
+        out["stances_rejected"] = self.rejected
+        out["analysis_p50_ms"] = _pct(self.analysis_s, 50)
+        out["analysis_p99_ms"] = _pct(self.analysis_s, 99)
+        out["body_model"] = "ready" if self.stage is not None else "waiting for subject/markers"
+        return out
+
+    def _diag_level(self) -> tuple[int, str]:
+        lost = sum(t.lost for t in self.trackers.values()) + self.force_buf.dropped + self.marker_buf.dropped
+        return (1, f"{lost} input messages lost or too late") if lost else (0, "ok")
+
+
+def _pct(values: list[float], q: float) -> float:
+    return float(np.percentile(values, q) * 1e3) if values else math.nan
+
+
+def _nan(x) -> float:
+    return math.nan if x is None else float(x)
+
+
+def stance_message(res: StanceResult, t0_ns: int) -> StanceKinetics:
+    """A :class:`StanceResult` as a ``StanceKinetics`` message (arrays row-major (n, 3))."""
+    msg = StanceKinetics(stance_index=int(res.index), complete=bool(res.complete),
+                         rejection_reason=res.rejection_reason or "")
+    td_ns, to_ns = seconds_to_ns(t0_ns, res.touchdown_s), seconds_to_ns(t0_ns, res.takeoff_s)
+    set_stamp(msg.touchdown_stamp, td_ns)
+    set_stamp(msg.takeoff_stamp, to_ns)
+    set_stamp(msg.header.stamp, to_ns)
+    msg.header.frame_id = "lab"
+    msg.contact_time_s = float(res.contact_time_s)
+    msg.flight_time_before_s = _nan(res.flight_before_s)
+    msg.peak_grf_n = _nan(res.peak_grf_n)
+    msg.peak_grf_bw = _nan(res.peak_grf_bw)
+    msg.hop_frequency_hz = _nan(res.hop_frequency_hz)
+    msg.leg_stiffness_n_per_m = _nan(res.leg_stiffness_n_per_m)
+    msg.hip_excursion_m = _nan(res.hip_excursion_m)
+    if res.joints is not None:
+        j = res.joints
+        msg.time_s = j.time_s.astype(float)
+        msg.angle_rad = j.angle_rad.ravel().astype(float)
+        msg.angular_velocity_rad_s = j.angular_velocity_rad_s.ravel().astype(float)
+        msg.moment_nm = j.moment_nm.ravel().astype(float)
+        msg.power_w = j.power_w.ravel().astype(float)
+    return msg
+
+
+def stance_from_message(msg: StanceKinetics) -> StanceResult:
+    """Inverse of :func:`stance_message` for what the impedance fit needs (times relative to touchdown)."""
+    from hop_impedance.biomech.analysis import JointSeries
+
+    td = stamp_ns(msg.touchdown_stamp) * 1e-9
+    res = StanceResult(
+        int(msg.stance_index), td, stamp_ns(msg.takeoff_stamp) * 1e-9, bool(msg.complete),
+        msg.rejection_reason or None, float(msg.contact_time_s), msg.peak_grf_n, msg.peak_grf_bw,
+        None if math.isnan(msg.flight_time_before_s) else msg.flight_time_before_s, None,
+        None if math.isnan(msg.hop_frequency_hz) else msg.hop_frequency_hz,
+        leg_stiffness_n_per_m=msg.leg_stiffness_n_per_m, hip_excursion_m=msg.hip_excursion_m,
+    )
+    n = len(msg.time_s)
+    if n:
+        res.joints = JointSeries(
+            np.asarray(msg.time_s, float),
+            *(np.asarray(a, float).reshape(n, 3) for a in (msg.angle_rad, msg.angular_velocity_rad_s, msg.moment_nm, msg.power_w)),
+        )
+    return res
+
+
+def frame_messages(res: StanceResult, t0_ns: int) -> list[JointKinetics]:
+    """One ``JointKinetics`` per force frame of an analysed stance."""
+    j = res.joints
+    out = []
+    for i in range(len(j.time_s)):
+        msg = JointKinetics(stance_index=int(res.index), time_since_touchdown_s=float(j.time_s[i]))
+        set_stamp(msg.header.stamp, seconds_to_ns(t0_ns, res.touchdown_s + float(j.time_s[i])))
+        msg.header.frame_id = "lab"
+        msg.angle_rad = j.angle_rad[i].tolist()
+        msg.angular_velocity_rad_s = j.angular_velocity_rad_s[i].tolist()
+        msg.moment_nm = j.moment_nm[i].tolist()
+        msg.power_w = j.power_w[i].tolist()
+        msg.grf_z_n = math.nan
+        msg.cop_x_m = math.nan
+        out.append(msg)
+    return out
+
+
+def main(args=None) -> None:
+    """Run the node (``python -m hop_impedance.nodes.inverse_dynamics --ros-args -p ...``)."""
+    from hop_impedance.nodes.common import spin_node
+
+    spin_node(InverseDynamicsNode, args)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,111 @@
+"""``recorder``: write the pipeline's topics to an MCAP file so a session can be replayed and audited.
+
+Subscribes ``topics`` (default: every output topic and ``/diagnostics``) as
+raw CDR (no decode) and writes them with the contract's MCAP layout
+(rosbag2 style, schema text embedded). With ``copy_inputs_from`` (the
+replayed recording) the input topics are copied from that file first, byte
+for byte, so the output file holds inputs and outputs without pushing the
+1 kHz inputs through DDS a second time; live, list the input topics in
+``topics`` instead.
+
+Times: ``log_time`` = the message's ``header.stamp`` (the sample clock,
+so outputs sit next to the input samples they come from: a profile at its
+take-off), ``publish_time`` = the wall-clock receive time. Every pipeline
+message starts with a ``std_msgs/Header``, read straight from the CDR bytes.
+The file is finished (index and summary written) when the node is destroyed.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from rclpy.node import Node
+
+from hop_impedance.io.mcap_io import McapWriter
+from hop_impedance.nodes.common import OUTPUT_TOPICS, TOPIC_TYPES, InputTracker, ProgressReporter, declare, header_stamp_ns
+from hop_impedance.nodes.message_types import message_class
+from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
+from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
+
+
+class RecorderNode(Node):
+    """Writes topics to ``output``; see the module docstring."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("recorder", **kwargs)
+        self.output = declare(self, "output", "", "MCAP file to write (its folder is created)")
+        topics = declare(self, "topics", list(OUTPUT_TOPICS), "topics to record (type from the pipeline's topic table)")
+        source = declare(self, "copy_inputs_from", "", "copy the input topics of this MCAP into the output first")
+        reliable = declare(self, "reliable_inputs", True, "QoS reliability used for recorded input topics")
+        if not self.output:
+            raise ValueError("recorder: parameter 'output' is required")
+        unknown = [t for t in topics if t not in TOPIC_TYPES]
+        if unknown:
+            raise ValueError(f"recorder: no known type for topic(s) {unknown}; known: {sorted(TOPIC_TYPES)}")
+        Path(self.output).parent.mkdir(parents=True, exist_ok=True)
+        self.writer = McapWriter(self.output)
+        self.copied = copy_messages(source, self.writer) if source else 0
+        self.trackers = {t: InputTracker(t) for t in topics}
+        for topic in topics:
+            qos = latched_qos() if topic in (SUBJECT_TOPIC, "/impedance/controller") else (
+                input_qos(reliable) if topic in (FORCE_TOPIC, MARKER_TOPIC) else result_qos(5000))
+            self.create_subscription(message_class(TOPIC_TYPES[topic]), topic, self._writer_for(topic), qos, raw=True)
+        self.progress = ProgressReporter(self, self.trackers, period_s=0.05)
+
+    def _writer_for(self, topic: str):
+        type_name = TOPIC_TYPES[topic]
+        tracker = self.trackers[topic]
+
+        def on_message(data: bytes) -> None:
+            stamp = header_stamp_ns(data)
+            tracker.received += 1
+            self.writer.write_serialized(topic, type_name, data, stamp, time.time_ns())
+            self.progress.processed_ns[topic] = max(stamp, self.progress.processed_ns.get(topic, 0))
+
+        return on_message
+
+    def close(self) -> None:
+        """Finish the file (safe to call twice)."""
+        self.writer.close()
+
+    def destroy_node(self) -> None:
+        self.close()
+        super().destroy_node()
+
+
+def copy_messages(path: str, writer: McapWriter, topics: tuple[str, ...] = (FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC)) -> int:
+    """Copy ``topics`` of an MCAP file into ``writer`` unchanged (CDR bytes, log and publish times)."""
+    from mcap.reader import make_reader
+
+    n = 0
+    with open(path, "rb") as fh:
+        for schema, channel, message in make_reader(fh).iter_messages(topics=list(topics), log_time_order=True):
+            writer.write_serialized(channel.topic, schema.name, message.data, message.log_time, message.publish_time)
+            n += 1
+    return n
+
+
+def main(args=None) -> None:
+    """Run the node (``python -m hop_impedance.nodes.recorder --ros-args -p output:=OUT.mcap``)."""
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    from hop_impedance.nodes.common import make_executor
+
+    with rclpy.init(args=args):
+        node = None
+        try:
+            node = RecorderNode()
+            executor = make_executor()
+            executor.add_node(node)
+            executor.spin()
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        finally:
+            if node is not None:
+                node.close()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,340 @@
+"""The pipeline runner: replay -> stance_detector, inverse_dynamics -> impedance_estimator -> recorder.
+
+``run_pipeline`` starts the node graph either in this process (one
+EventsExecutor spinning every node) or as separate processes
+(``python -m hop_impedance.nodes.<name> --ros-args -p ...``, inheriting the
+environment, so ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` carries over),
+plus a :class:`ResultCollector` in this process that gathers what the
+pipeline publishes. It returns when the stream has been played and every
+stance result has reached the collector and the recorder, or at the time
+limit; child processes are always stopped (SIGINT, then SIGKILL) on return,
+error or Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from rclpy.node import Node
+
+from hop_impedance.nodes.common import (
+    CONTROLLER_TOPIC, DIAGNOSTICS_TOPIC, PROFILE_TOPIC, PROGRESS_TOPIC, SUMMARY_TOPIC, stamp_ns,
+)
+from hop_impedance.nodes.qos import latched_qos, result_qos
+from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC
+
+CONSUMERS = ["/stance_detector", "/inverse_dynamics"]
+NODE_MODULES = ("stance_detector", "inverse_dynamics", "impedance_estimator", "recorder", "replay")
+
+
+@dataclass
+class PipelineConfig:
+    """What :func:`run_pipeline` runs.
+
+    Attributes
+    ----------
+    recording : str
+        MCAP to replay.
+    out_dir : str
+        Folder of the output MCAP (``pipeline.mcap``: inputs + outputs).
+    rate : float
+        Replay speed factor; 0 = as fast as the consumers take it (progress flow control).
+    processes : bool
+        Separate OS processes instead of one process.
+    low_latency : bool
+        inverse_dynamics analyses at take-off + post_pad_s (stages.py) instead of batch-identical windows.
+    publish_frames : bool
+        Per-frame JointKinetics.
+    rerun : bool
+        Add the Rerun bridge node (if installed).
+    timeout_s : float
+        Give up (and report) after this long.
+    params_file : str or None
+        ROS 2 YAML parameter file for the nodes (``config/pipeline.yaml``).
+    """
+
+    recording: str
+    out_dir: str = "pipeline_out"
+    rate: float = 0.0
+    processes: bool = False
+    low_latency: bool = False
+    publish_frames: bool = True
+    rerun: bool = False
+    timeout_s: float = 120.0
+    params_file: str | None = None
+    loop: bool = False
+
+    @property
+    def output_mcap(self) -> str:
+        return str(Path(self.out_dir) / "pipeline.mcap")
+
+
+@dataclass
+class PipelineReport:
+    """What came out: per-stance summaries and profiles, progress of each node, diagnostics, timing."""
+
+    summaries: list = field(default_factory=list)
+    profiles: list = field(default_factory=list)
+    controller: object = None
+    progress: dict = field(default_factory=dict)
+    diagnostics: dict = field(default_factory=dict)
+    wall_s: float = 0.0
+    finished: bool = False
+    output_mcap: str = ""
+
+    def received(self, node: str, topic: str) -> int:
+        """Messages of ``topic`` the node ``node`` reported received (0 if unknown)."""
+        p = self.progress.get(node)
+        if p is None or topic not in p.topics:
+            return 0
+        return int(p.received[list(p.topics).index(topic)])
+
+    def diag(self, node: str, key: str, default: str = "") -> str:
+        return self.diagnostics.get(node, {}).get(key, default)
+
+
+class ResultCollector(Node):
+    """Collects summaries, profiles, the controller feed, progress and diagnostics of the pipeline."""
+
+    def __init__(self, **kwargs) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
+
+        from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, Progress, StanceSummary
+
+        super().__init__("result_collector", **kwargs)
+        self.report = PipelineReport()
+        r = self.report
+        self.create_subscription(StanceSummary, SUMMARY_TOPIC, r.summaries.append, result_qos(1000))
+        self.create_subscription(ImpedanceProfile, PROFILE_TOPIC, r.profiles.append, result_qos(1000))
+        self.create_subscription(ControllerImpedance, CONTROLLER_TOPIC, lambda m: setattr(r, "controller", m), latched_qos())
+        self.create_subscription(Progress, PROGRESS_TOPIC, lambda m: r.progress.__setitem__(m.node, m), result_qos(100))
+        self.create_subscription(DiagnosticArray, DIAGNOSTICS_TOPIC, self._on_diag, 50)
+
+    def _on_diag(self, msg) -> None:
+        for status in msg.status:
+            self.report.diagnostics[status.name] = {kv.key: kv.value for kv in status.values}
+
+    def done(self) -> bool:
+        """Stream ended, the detector and inverse dynamics flushed, every stance summarised and recorded."""
+        p = self.report.progress
+        idn, det, rec = p.get("/inverse_dynamics"), p.get("/stance_detector"), p.get("/recorder")
+        if not (idn and det and rec and idn.finished and det.finished):
+            return False
+        n = idn.stances_out
+        return len(self.report.summaries) >= n and self.report.received("/recorder", SUMMARY_TOPIC) >= n
+
+
+def node_parameters(cfg: PipelineConfig) -> dict[str, dict]:
+    """Parameters of each node for ``cfg`` (on top of ``cfg.params_file``)."""
+    return {
+        "replay": {"recording": str(cfg.recording), "rate": float(cfg.rate), "loop": bool(cfg.loop),
+                   "consumers": CONSUMERS, "wait_for_subscribers_s": 10.0},
+        "stance_detector": {},
+        "inverse_dynamics": {"low_latency": bool(cfg.low_latency), "publish_frames": bool(cfg.publish_frames)},
+        "impedance_estimator": {},
+        "recorder": {"output": cfg.output_mcap, "copy_inputs_from": str(cfg.recording)},
+    }
+
+
+def run_pipeline(cfg: PipelineConfig) -> PipelineReport:
+    """Run the node graph on ``cfg.recording``; see the module docstring."""
+    if not Path(cfg.recording).exists():
+        raise FileNotFoundError(f"{cfg.recording}: no such recording")
+    Path(cfg.out_dir).mkdir(parents=True, exist_ok=True)
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    return _run_processes(cfg) if cfg.processes else _run_in_process(cfg)
+
+
+def _spin_until_done(executor, collector: ResultCollector, cfg: PipelineConfig, t0: float, alive=lambda: None) -> None:
+    deadline = t0 + cfg.timeout_s
+    while time.monotonic() < deadline and not collector.done():
+        executor.spin_once(timeout_sec=0.05)
+        alive()
+    end = time.monotonic() + 0.3  # let the last diagnostics / controller message in
+    while time.monotonic() < end:
+        executor.spin_once(timeout_sec=0.05)
+    collector.report.finished = collector.done()
+
+
+def _in_process_nodes(cfg: PipelineConfig, context) -> list[Node]:
+    from rclpy.parameter import Parameter
+
+    from hop_impedance.nodes.impedance_estimator import ImpedanceEstimatorNode
+    from hop_impedance.nodes.inverse_dynamics import InverseDynamicsNode
+    from hop_impedance.nodes.recorder import RecorderNode
+    from hop_impedance.nodes.replay import ReplayNode
+    from hop_impedance.nodes.stance_detector import StanceDetectorNode
+
+    params = node_parameters(cfg)
+    classes = {"stance_detector": StanceDetectorNode, "inverse_dynamics": InverseDynamicsNode,
+               "impedance_estimator": ImpedanceEstimatorNode, "recorder": RecorderNode}
+    nodes = []
+    for name, cls in classes.items():
+        nodes.append(cls(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in params[name].items()]))
+    if cfg.rerun:
+        nodes.extend(_rerun_nodes(context))
+    nodes.append(ReplayNode(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in params["replay"].items()]))
+    return nodes
+
+
+def _rerun_nodes(context) -> list[Node]:
+    try:
+        from hop_impedance.nodes.rerun_bridge import RerunBridge
+    except ImportError as exc:
+        print(f"hop-impedance pipeline: --rerun ignored: {exc}", file=sys.stderr)
+        return []
+    return [RerunBridge(context=context)]
+
+
+def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
+    import rclpy
+
+    context = rclpy.Context()
+    t0 = time.monotonic()
+    rclpy.init(context=context, args=["--ros-args", "--params-file", cfg.params_file] if cfg.params_file else None)
+    nodes = []
+    try:
+        collector = ResultCollector(context=context)
+        nodes = [collector] + _in_process_nodes(cfg, context)
+        executor = _executor_for(context)
+        for n in nodes:
+            executor.add_node(n)
+        _spin_until_done(executor, collector, cfg, t0)
+        replay = nodes[-1]
+        replay.stop()
+        if replay.error:
+            raise ValueError(replay.error)
+        report = collector.report
+    finally:
+        for n in reversed(nodes):
+            n.destroy_node()
+        rclpy.shutdown(context=context)
+    report.wall_s = time.monotonic() - t0
+    report.output_mcap = cfg.output_mcap
+    return report
+
+
+def _executor_for(context):
+    from rclpy.experimental import EventsExecutor
+
+    return EventsExecutor(context=context)
+
+
+def child_command(name: str, params: dict, params_file: str | None = None) -> list[str]:
+    """``python -m hop_impedance.nodes.<name> --ros-args [--params-file F] -p k:=v ...``."""
+    cmd = [sys.executable, "-m", f"hop_impedance.nodes.{name}", "--ros-args"]
+    if params_file:
+        cmd += ["--params-file", params_file]
+    for k, v in params.items():
+        cmd += ["-p", f"{k}:={_yaml(v)}"]
+    return cmd
+
+
+def _yaml(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, list):
+        return "[" + ",".join(f"'{x}'" for x in v) + "]"
+    if isinstance(v, float):
+        return repr(v)
+    return str(v)
+
+
+def start_children(names, cfg: PipelineConfig, log_dir: Path) -> dict[str, subprocess.Popen]:
+    """Start node processes (environment inherited); stdout/stderr to ``log_dir/<name>.log``."""
+    params = node_parameters(cfg)
+    children = {}
+    for name in names:
+        log = open(log_dir / f"{name}.log", "w")  # noqa: SIM115 - closed with the process
+        children[name] = subprocess.Popen(child_command(name, params[name], cfg.params_file), env=dict(os.environ),
+                                          stdout=log, stderr=subprocess.STDOUT)
+        log.close()
+    return children
+
+
+def stop_children(children: dict[str, subprocess.Popen], grace_s: float = 5.0) -> None:
+    """SIGINT every child (nodes exit cleanly, the recorder finishes its file), then SIGKILL stragglers."""
+    for p in children.values():
+        if p.poll() is None:
+            p.send_signal(signal.SIGINT)
+    deadline = time.monotonic() + grace_s
+    for p in children.values():
+        try:
+            p.wait(timeout=max(0.1, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+
+
+def _run_processes(cfg: PipelineConfig) -> PipelineReport:
+    import rclpy
+
+    t0 = time.monotonic()
+    log_dir = Path(cfg.out_dir) / "logs"
+    log_dir.mkdir(parents=True, exist_ok=True)
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    children: dict[str, subprocess.Popen] = {}
+    try:
+        collector = ResultCollector(context=context)
+        executor = _executor_for(context)
+        executor.add_node(collector)
+        children = start_children(NODE_MODULES, cfg, log_dir)
+
+        def alive() -> None:
+            for name, p in children.items():
+                if p.poll() not in (None, 0):
+                    raise RuntimeError(f"node {name} exited with code {p.returncode}; see {log_dir / (name + '.log')}")
+
+        _spin_until_done(executor, collector, cfg, t0, alive)
+        report = collector.report
+    finally:
+        stop_children(children)
+        collector.destroy_node() if "collector" in locals() else None
+        rclpy.shutdown(context=context)
+    report.wall_s = time.monotonic() - t0
+    report.output_mcap = cfg.output_mcap
+    return report
+
+
+def stance_table(report: PipelineReport) -> list[str]:
+    """The per-stance table: index, touchdown (s from the first stance), contact time, k0/k1 and R^2 per joint, status."""
+    rows = sorted(report.summaries, key=lambda s: stamp_ns(s.touchdown_stamp))
+    if not rows:
+        return ["no stances"]
+    t_first = stamp_ns(rows[0].touchdown_stamp)
+    head = (f"{'#':>3} {'td s':>7} {'tc s':>6} | {'ankle k0':>8} {'k1':>7} {'R2':>5} | {'knee k0':>8} {'k1':>7} {'R2':>5} | "
+            f"{'hip k0':>8} {'k1':>7} {'R2':>5} | status")
+    lines = [head, "-" * len(head)]
+    for s in rows:
+        cells = []
+        for j in range(3):
+            cells.append(f"{_n(s.k0[j], 8, 1)} {_n(s.k1[j], 7, 0)} {_n(s.r_squared[j], 5, 3)}")
+        status = "accepted" if not s.rejection_reason else s.rejection_reason
+        td = (stamp_ns(s.touchdown_stamp) - t_first) * 1e-9
+        lines.append(f"{s.stance_index:>3} {td:>7.3f} {s.contact_time_s:>6.3f} | " + " | ".join(cells) + f" | {status}")
+    lines.append("k0 in N m/rad, k1 in N m/rad^2 (both legs lumped; 0 = term removed by the model reduction)")
+    return lines
+
+
+def _n(x: float, width: int, digits: int) -> str:
+    return f"{x:>{width}.{digits}f}" if x == x else f"{'-':>{width}}"
+
+
+def loss_lines(report: PipelineReport, file_counts: dict[str, int]) -> list[str]:
+    """Messages in the file vs received per consumer, and the losses the nodes counted."""
+    out = []
+    for node in CONSUMERS:
+        for topic in (FORCE_TOPIC, MARKER_TOPIC):
+            if node == "/stance_detector" and topic == MARKER_TOPIC:
+                continue
+            got = report.received(node, topic)
+            sent = file_counts.get(topic, 0)
+            out.append(f"{node} {topic}: {got} of {sent} received, {max(sent - got, 0)} lost")
+    return out

@@ -1,0 +1,157 @@
+"""``stance_detector``: touchdown / take-off events from the force plate.
+
+Subscribes ``/force_plate/wrench``, feeds the vertical force to
+:class:`hop_impedance.biomech.stages.StanceDetectorStage` (the same state
+machine as the batch analysis) and publishes ``StanceEvent`` on
+``/stance/events`` (reliable). Samples are reordered over
+``reorder_window_s`` of stamp time before detection; samples arriving later
+than that are counted (``late_dropped``) and skipped.
+
+Parameters (``config/pipeline.yaml``): ``reliable_inputs``,
+``reorder_window_s``, ``process_period_s``, ``diagnostics_period_s``,
+``touchdown_n``, ``takeoff_n``, ``min_flight_s``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from geometry_msgs.msg import WrenchStamped
+from rclpy.node import Node
+from std_msgs.msg import Header
+
+from hop_impedance.biomech.stages import StanceDetectorStage
+from hop_impedance.biomech.stance_detection import DetectorOptions
+from hop_impedance.nodes.common import (
+    END_TOPIC, EVENTS_TOPIC, Diagnostics, InputTracker, ProgressReporter, ReorderBuffer, declare, seconds_to_ns,
+    set_stamp, stamp_ns,
+)
+from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
+from hop_impedance.recording import FORCE_TOPIC
+from hop_impedance_msgs.msg import StanceEvent
+
+
+class StanceDetectorNode(Node):
+    """Publishes contact events; see the module docstring."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__("stance_detector", **kwargs)
+        reliable = declare(self, "reliable_inputs", True, "match reliable publishers (replay, many mocap drivers); false = sensor-data best effort")
+        reorder_s = declare(self, "reorder_window_s", 0.02, "hold samples this long (stamp time, s) to sort out-of-order arrivals")
+        period = declare(self, "process_period_s", 0.005, "run the detector on the buffered samples this often (s)")
+        diag = declare(self, "diagnostics_period_s", 1.0, "publish /diagnostics this often (s); 0 = never")
+        opts = DetectorOptions(
+            touchdown_n=declare(self, "touchdown_n", 40.0, "touchdown threshold above the flight baseline (N)"),
+            takeoff_n=declare(self, "takeoff_n", 20.0, "take-off threshold above the flight baseline (N)"),
+            min_flight_s=declare(self, "min_flight_s", 0.05, "a dip must last this long to be a flight (s)"),
+        )
+        self.stage = StanceDetectorStage(opts)
+        self.t0_ns: int | None = None
+        self.buffer = ReorderBuffer(int(reorder_s * 1e9))
+        self.tracker = InputTracker(FORCE_TOPIC)
+        self.events_out = 0
+        self.touchdowns = 0
+        self._recent_t = np.zeros(0)
+        self._recent_fz = np.zeros(0)
+        self.pub = self.create_publisher(StanceEvent, EVENTS_TOPIC, result_qos())
+        self.create_subscription(WrenchStamped, FORCE_TOPIC, self._on_wrench, input_qos(reliable))
+        self.create_subscription(Header, END_TOPIC, self._on_end, latched_qos())
+        self.progress = ProgressReporter(self, {FORCE_TOPIC: self.tracker})
+        self.diagnostics = Diagnostics(self, diag, self._diag_values)
+        self.end_timeout_s = declare(self, "end_timeout_s", 3.0, "after end-of-stream, wait this long (s) for missing data")
+        self._end: tuple[int, float] | None = None
+        self.create_timer(period, self._tick)
+
+    def _on_wrench(self, msg: WrenchStamped) -> None:
+        ns = stamp_ns(msg.header.stamp)
+        self.tracker.note(ns)
+        self.buffer.add(ns, msg.wrench.force.z)
+
+    def _tick(self) -> None:
+        self.process()
+        self._check_end()
+
+    def process(self, everything: bool = False) -> None:
+        """Run the detector on released samples and publish the events."""
+        items = self.buffer.release(everything)
+        if not items:
+            return
+        ns = np.fromiter((i[0] for i in items), np.int64, len(items))
+        fz = np.fromiter((i[1] for i in items), float, len(items))
+        if self.t0_ns is None:
+            self.t0_ns = int(ns[0])
+        t = (ns - self.t0_ns) * 1e-9
+        keep = self._recent_t > t[-1] - 3.0
+        self._recent_t = np.concatenate([self._recent_t[keep], t])
+        self._recent_fz = np.concatenate([self._recent_fz[keep], fz])
+        for ev in self.stage.push((t, fz)):
+            self._publish(ev)
+        self.progress.processed_ns[FORCE_TOPIC] = int(ns[-1])
+        self.diagnostics.sample_ns = int(ns[-1])
+
+    def _on_end(self, msg: Header) -> None:
+        """End of a replayed stream: finish once data up to its stamp are in (or after ``end_timeout_s``)."""
+        self._end = (stamp_ns(msg.stamp), time.monotonic() + self.end_timeout_s)
+
+    def _check_end(self) -> None:
+        if self._end is None or self.progress.finished:
+            return
+        end_ns, deadline = self._end
+        newest = max((t.newest_ns or 0) for t in [self.tracker])
+        if newest >= end_ns or time.monotonic() > deadline:
+            self._finish()
+
+    def _finish(self) -> None:
+        """End of a replayed stream: flush once every sample up to its last stamp is in."""
+        self.process(everything=True)
+        for ev in self.stage.flush():
+            self._publish(ev)
+        self.progress.finished = True
+        self.progress.publish()
+
+    def _publish(self, ev) -> None:
+        """One StanceEvent; a take-off carries its stance's contact time, peak force and flight before."""
+        msg = StanceEvent(threshold_n=float(self.stage.detector.options.takeoff_n), complete=True,
+                          flight_time_before_s=math.nan)
+        stances = self.stage.stances
+        if ev.kind == "touchdown":
+            msg.event_type = StanceEvent.TOUCHDOWN
+            msg.stance_index = len(stances)
+            if stances:
+                msg.flight_time_before_s = ev.time_s - stances[-1].takeoff_s
+        else:
+            msg.event_type = StanceEvent.TAKEOFF
+            k = len(stances) - 1
+            s = stances[k]
+            msg.stance_index = k
+            msg.complete = bool(s.complete)
+            msg.contact_time_s = float(s.takeoff_s - s.touchdown_s)
+            if k > 0:
+                msg.flight_time_before_s = s.touchdown_s - stances[k - 1].takeoff_s
+            sel = (self._recent_t >= s.touchdown_s) & (self._recent_t <= s.takeoff_s)
+            if np.any(sel):
+                msg.peak_grf_n = float(np.max(self._recent_fz[sel]) - ev.baseline_n)
+        event_ns = seconds_to_ns(self.t0_ns, ev.time_s)
+        set_stamp(msg.event_stamp, event_ns)
+        set_stamp(msg.header.stamp, event_ns)
+        msg.header.frame_id = "force_plate"
+        self.pub.publish(msg)
+        self.events_out += 1
+
+    def _diag_values(self) -> dict:
+        t = self.tracker
+        return {"force_received": t.received, "force_rate_hz": t.rate_hz, "force_lost": t.lost,
+                "force_out_of_order": t.late, "force_late_dropped": self.buffer.dropped, "events_published": self.events_out}
+
+
+def main(args=None) -> None:
+    """Run the node (``python -m hop_impedance.nodes.stance_detector --ros-args -p ...``)."""
+    from hop_impedance.nodes.common import spin_node
+
+    spin_node(StanceDetectorNode, args)
+
+
+if __name__ == "__main__":
+    main()
