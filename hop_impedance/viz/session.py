@@ -142,21 +142,73 @@ def analyze_and_fit(recording: Recording):
     return analysis, fit_recording(analysis)
 
 
-def write_rrd(recording_path: str | Path, analysis, fits: list[dict] | None, out_path: str | Path) -> SessionSummary:
-    """Write the full view of a recording to an .rrd file (with the default blueprint).
+DEFAULT_VIEWER_URL = "rerun+http://127.0.0.1:9876/proxy"
+
+
+def open_sinks(
+    rec: rr.RecordingStream,
+    blueprint,
+    save: str | Path | None = None,
+    connect_url: str | None = None,
+    spawn: bool = False,
+    port: int = 9876,
+) -> None:
+    """Send ``rec`` to an .rrd file, a running viewer and/or a freshly spawned viewer.
+
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+    blueprint : rerun.blueprint.Blueprint
+        Sent as the default blueprint to every sink.
+    save : path, optional
+        .rrd file to write (parent folders are created).
+    connect_url : str, optional
+        gRPC address of a running viewer, e.g. :data:`DEFAULT_VIEWER_URL`.
+    spawn : bool
+        Start a viewer on loopback ``port`` and stream to it (needs a display).
+    port : int
+
+    Raises
+    ------
+    ValueError
+        When no sink is asked for.
+    """
+    sinks = []
+    if spawn:
+        ensure_analytics_disabled()
+        rr.spawn(port=port, connect=False, hide_welcome_screen=True)
+        connect_url = connect_url or f"rerun+http://127.0.0.1:{port}/proxy"
+    if connect_url:
+        sinks.append(rr.GrpcSink(connect_url))
+    if save is not None:
+        Path(save).parent.mkdir(parents=True, exist_ok=True)
+        sinks.append(rr.FileSink(str(save)))
+    if not sinks:
+        raise ValueError("no Rerun output: give a file to save, a viewer address to connect to, or spawn a viewer")
+    rec.set_sinks(*sinks, default_blueprint=blueprint)
+
+
+def view_recording(
+    recording_path: str | Path,
+    save: str | Path | None = None,
+    connect_url: str | None = None,
+    spawn: bool = False,
+    analysis=None,
+    fits: list[dict] | None = None,
+) -> SessionSummary:
+    """Analyse (unless ``analysis`` is given), fit and log a recording to the chosen sinks.
 
     Parameters
     ----------
     recording_path : str or Path
         Contract MCAP recording.
-    analysis : RecordingAnalysis or None
-        Its analysis; None runs :func:`analyze_recording` (and the fits).
-    fits : list of dict or None
-        One ``{joint: JointImpedanceFit}`` per stance; None with an analysis
-        given draws no fits; None without an analysis computes them.
-    out_path : str or Path
-        The .rrd to write (parent folders are created). Open it with
-        ``.venv/bin/rerun OUT.rrd``.
+    save, connect_url, spawn
+        Outputs, as in :func:`open_sinks`.
+    analysis : RecordingAnalysis, optional
+        Its analysis; None runs :func:`analyze_recording` and :func:`fit_recording`.
+    fits : list of dict, optional
+        One ``{joint: JointImpedanceFit}`` per stance; with ``analysis`` given
+        and ``fits`` None the views show the inverse dynamics without fits.
 
     Returns
     -------
@@ -168,12 +220,34 @@ def write_rrd(recording_path: str | Path, analysis, fits: list[dict] | None, out
     recording = load_recording(recording_path)
     if analysis is None:
         analysis, fits = analyze_and_fit(recording)
-    out = Path(out_path)
-    out.parent.mkdir(parents=True, exist_ok=True)
     rec = new_recording_stream()
     markers = sagittal_markers(recording.markers) if recording.markers is not None and len(recording.markers) else None
-    rec.save(out, default_blueprint=default_blueprint(body_bounds(markers)))
+    open_sinks(rec, default_blueprint(body_bounds(markers)), save=save, connect_url=connect_url, spawn=spawn)
     summary = log_session(rec, recording, analysis, fits)
     rec.flush()
     rec.disconnect()
     return summary
+
+
+def write_rrd(recording_path: str | Path, analysis, fits: list[dict] | None, out_path: str | Path) -> SessionSummary:
+    """Write the full view of a recording to an .rrd file (with the default blueprint).
+
+    For ``make demo``. Open the file with ``.venv/bin/rerun OUT.rrd``.
+
+    Parameters
+    ----------
+    recording_path : str or Path
+        Contract MCAP recording.
+    analysis : RecordingAnalysis or None
+        Its analysis; None runs the analysis and the fits.
+    fits : list of dict or None
+        One ``{joint: JointImpedanceFit}`` per stance (``fit_recording``);
+        None with an analysis given draws no fits.
+    out_path : str or Path
+        The .rrd to write (parent folders are created).
+
+    Returns
+    -------
+    SessionSummary
+    """
+    return view_recording(recording_path, save=out_path, analysis=analysis, fits=fits)
