@@ -165,10 +165,14 @@ def cop_x_from_wrench(force_n: np.ndarray, torque_nm: np.ndarray, min_fz_n: floa
     return out
 
 
-def log_stance_interval(rec: rr.RecordingStream, touchdown_s: float, takeoff_s: float | None) -> None:
-    """Mark a stance on the GRF plot: the 0/1 step series goes to 1 at touchdown, 0 at take-off."""
-    times = [touchdown_s] + ([takeoff_s] if takeoff_s is not None else [])
-    rec.send_columns(S.IN_STANCE, indexes=[_time(np.array(times))], columns=rr.Scalars.columns(scalars=[1.0, 0.0][: len(times)]))
+def log_stance_event(rec: rr.RecordingStream, t_s: float, touchdown: bool) -> None:
+    """One stance mark on the GRF plot: the 0/1 step series goes to 1 at a touchdown, 0 at a take-off."""
+    rec.send_columns(S.IN_STANCE, indexes=[_time(np.array([t_s]))], columns=rr.Scalars.columns(scalars=[1.0 if touchdown else 0.0]))
+
+
+def log_stance_interval(rec: rr.RecordingStream, touchdown_s: float, takeoff_s: float) -> None:
+    """Mark a stance on the GRF plot (touchdown and take-off, s)."""
+    rec.send_columns(S.IN_STANCE, indexes=[_time(np.array([touchdown_s, takeoff_s]))], columns=rr.Scalars.columns(scalars=[1.0, 0.0]))
 
 
 def log_joint_series(
