@@ -15,6 +15,7 @@ help:
 	@echo "make demo   - set up and run the main job on $(DEMO_RECORDING)"
 	@echo "make test   - set up and run the tests"
 	@echo "make bench  - run the benchmarks in bench/"
+	@echo "make screenshot - render docs/rerun_screenshot.png headless"
 	@echo "make clean  - remove build products (keeps .venv)"
 
 setup:
@@ -28,6 +29,11 @@ test: setup
 
 bench: setup
 	@for f in bench/bench_*.py; do echo "== $$f"; $(PY) $$f || exit 1; done
+
+# A picture of the Rerun viewer with the default blueprint, rendered without a GPU
+# (installs Debian's mesa-vulkan-drivers if missing): docs/rerun_screenshot.png
+screenshot: setup
+	@bash scripts/screenshot.sh
 
 clean:
 	rm -rf build $(DEMO_OUT) demo.rrd
