@@ -18,7 +18,8 @@ def register(subparsers) -> None:
         help="stances, joint kinematics and inverse dynamics of a recording",
         description="Detect stances, run 2D inverse dynamics and write per-stance results as JSON.",
     )
-    p.add_argument("recording", help="contract recording (MCAP)")
+    p.add_argument("recordings", nargs="+", metavar="recording",
+                   help="contract recording(s) (MCAP); with several, the JSON is a list of documents")
     p.add_argument("--json", required=True, metavar="OUT", help="output JSON file ('-' for stdout)")
     p.add_argument("--mass-kg", type=float, help="body mass (kg), overrides/replaces the /subject message")
     p.add_argument("--height-m", type=float, help="body height (m), overrides/replaces the /subject message")
@@ -27,11 +28,14 @@ def register(subparsers) -> None:
     p.add_argument("--cutoff-hz", type=float, default=12.0, help="low-pass cut-off for markers and forces (Hz, default 12)")
     p.add_argument("--max-gap-s", type=float, default=0.05, help="longest marker gap filled (s, default 0.05)")
     p.add_argument("--no-fit", action="store_true", help="skip the per-stance impedance fits (no 'fit' objects)")
+    p.add_argument("--report", metavar="DIR",
+                   help="write Table 2/3 layouts (CSV, Markdown, Wilcoxon tests) and PNG figures of the fits; "
+                        "one condition per recording, labelled by its median hop frequency")
     p.add_argument("--indent", type=int, default=None, help="pretty-print the JSON with this indent")
     p.set_defaults(func=run)
 
 
-def _subject(rec, args):
+def _subject(rec, args, path):
     from dataclasses import replace
 
     from hop_impedance.recording import Subject
@@ -39,7 +43,7 @@ def _subject(rec, args):
     subj = rec.subject
     if subj is None:
         if args.mass_kg is None or args.height_m is None:
-            raise ValueError(f"{args.recording}: no /subject message; give --mass-kg and --height-m")
+            raise ValueError(f"{path}: no /subject message; give --mass-kg and --height-m")
         subj = Subject("unknown", args.mass_kg, args.height_m)
     changes = {}
     if args.mass_kg is not None:
@@ -79,6 +83,20 @@ def add_fits_to_json(doc: dict, analysis) -> list[dict]:
     return fits
 
 
+def condition_label(analysis, path: str, taken: list[str]) -> str:
+    """Report condition of one recording: its median hop frequency ("2.20 Hz"), else the file name; made unique."""
+    import os
+
+    import numpy as np
+
+    freqs = [s.hop_frequency_hz for s in analysis.stances if s.hop_frequency_hz is not None]
+    label = f"{np.median(freqs):.2f} Hz" if freqs else os.path.basename(path)
+    base, k = label, 2
+    while label in taken:
+        label, k = f"{base} ({k})", k + 1
+    return label
+
+
 def run(args: argparse.Namespace) -> int:
     """Load, analyse, write the JSON; print a one-line summary on stderr."""
     import json
@@ -87,29 +105,43 @@ def run(args: argparse.Namespace) -> int:
 
     from hop_impedance.biomech.analysis import AnalysisOptions, analysis_to_json, analyze_recording
     from hop_impedance.biomech.body_model import load_overrides
+    from hop_impedance.impedance.report import fit_records, write_report
     from hop_impedance.io.recording_io import load_recording
 
-    rec = load_recording(args.recording)
-    rec = replace(rec, subject=_subject(rec, args))
+    if args.report and args.no_fit:
+        raise ValueError("--report needs the fits; drop --no-fit")
     options = AnalysisOptions(
         marker_cutoff_hz=args.cutoff_hz,
         force_cutoff_hz=args.cutoff_hz,
         max_gap_s=args.max_gap_s,
         overrides=load_overrides(args.segments) if args.segments else None,
     )
-    analysis = analyze_recording(rec, options)
-    doc = analysis_to_json(analysis)
-    if not args.no_fit:
-        add_fits_to_json(doc, analysis)
+    docs, records, conditions = [], [], []
+    for path in args.recordings:
+        rec = load_recording(path)
+        rec = replace(rec, subject=_subject(rec, args, path))
+        analysis = analyze_recording(rec, options)
+        doc = analysis_to_json(analysis)
+        if not args.no_fit:
+            fits = add_fits_to_json(doc, analysis)
+            label = condition_label(analysis, path, conditions)
+            conditions.append(label)
+            records += fit_records(fits, label, analysis.subject.subject_id)
+        docs.append(doc)
+    if args.report:
+        written = write_report(records, conditions, args.report)
+        print(f"hop-impedance analyze: report ({len(written)} files) -> {args.report}", file=sys.stderr)
+    doc = docs[0] if len(docs) == 1 else docs
     text = json.dumps(doc, indent=args.indent, allow_nan=False)
     if args.json == "-":
         sys.stdout.write(text + "\n")
     else:
         with open(args.json, "w", encoding="utf-8") as fh:
             fh.write(text + "\n")
-    n = len(doc["stances"])
-    ok = sum(1 for s in doc["stances"] if s["joints"] is not None)
-    fitted = sum(1 for s in doc["stances"] for j in (s["joints"] or {}).values() if (j.get("fit") or {}).get("status") == "solved")
+    stances = [s for d in docs for s in d["stances"]]
+    n = len(stances)
+    ok = sum(1 for s in stances if s["joints"] is not None)
+    fitted = sum(1 for s in stances for j in (s["joints"] or {}).values() if (j.get("fit") or {}).get("status") == "solved")
     fits = "" if args.no_fit else f", {fitted} joint fits"
     print(f"hop-impedance analyze: {n} stances, {ok} with inverse dynamics{fits} -> {args.json}", file=sys.stderr)
     return 0
