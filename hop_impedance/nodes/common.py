@@ -276,9 +276,23 @@ def spin_node(node_factory, args=None) -> None:
             node = node_factory()
             executor = make_executor()
             executor.add_node(node)
-            executor.spin()
+            spin_until_shutdown(executor)
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
+
+
+def spin_until_shutdown(executor) -> None:
+    """``spin_once`` until rclpy shuts down (Ctrl-C / SIGTERM).
+
+    ``EventsExecutor.spin()`` of this rclpy neither returns on SIGINT nor
+    idles (measured: ~80 % of a core with no traffic); spin_once in a loop
+    does both.
+    """
+    import rclpy
+
+    context = executor.context
+    while rclpy.ok(context=context):
+        executor.spin_once(timeout_sec=0.1)
 
 
 def make_executor(kind: str = "events"):

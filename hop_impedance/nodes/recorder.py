@@ -48,7 +48,7 @@ class RecorderNode(Node):
         self.copied = copy_messages(source, self.writer) if source else 0
         self.trackers = {t: InputTracker(t) for t in topics}
         for topic in topics:
-            qos = latched_qos() if topic in (SUBJECT_TOPIC, "/impedance/controller") else (
+            qos = latched_qos() if topic == SUBJECT_TOPIC else (
                 input_qos(reliable) if topic in (FORCE_TOPIC, MARKER_TOPIC) else result_qos(5000))
             self.create_subscription(message_class(TOPIC_TYPES[topic]), topic, self._writer_for(topic), qos, raw=True)
         self.progress = ProgressReporter(self, self.trackers, period_s=0.05)
@@ -91,7 +91,7 @@ def main(args=None) -> None:
     import rclpy
     from rclpy.executors import ExternalShutdownException
 
-    from hop_impedance.nodes.common import make_executor
+    from hop_impedance.nodes.common import make_executor, spin_until_shutdown
 
     with rclpy.init(args=args):
         node = None
@@ -99,7 +99,7 @@ def main(args=None) -> None:
             node = RecorderNode()
             executor = make_executor()
             executor.add_node(node)
-            executor.spin()
+            spin_until_shutdown(executor)
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
         finally:

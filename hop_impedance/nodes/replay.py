@@ -276,6 +276,7 @@ def main(args=None) -> None:
             node = ReplayNode()
             while rclpy.ok() and not node.finished.is_set():
                 rclpy.spin_once(node, timeout_sec=0.1)
+            node._end_pub.wait_for_all_acked(Duration(seconds=5.0))  # the latched end-of-stream must reach the consumers
             for topic, n in node.published.items():
                 node.get_logger().info(f"{topic}: {n} messages")
         except (KeyboardInterrupt, ExternalShutdownException):

@@ -22,7 +22,7 @@ from geometry_msgs.msg import WrenchStamped
 from rclpy.node import Node
 from std_msgs.msg import Header
 
-from hop_impedance.biomech.stages import StanceDetectorStage
+from hop_impedance.biomech.stages import StanceDetectorStage, pending_stance
 from hop_impedance.biomech.stance_detection import DetectorOptions
 from hop_impedance.nodes.common import (
     END_TOPIC, EVENTS_TOPIC, Diagnostics, InputTracker, ProgressReporter, ReorderBuffer, declare, seconds_to_ns,
@@ -115,7 +115,10 @@ class StanceDetectorNode(Node):
         """One StanceEvent; a take-off carries its stance's contact time, peak force and flight before."""
         msg = StanceEvent(threshold_n=float(self.stage.detector.options.takeoff_n), complete=True,
                           flight_time_before_s=math.nan)
-        stances = self.stage.stances
+        stances = list(self.stage.stances)
+        pending = pending_stance(self.stage.detector)
+        if pending is not None:
+            stances.append(pending)  # a confirmed take-off waits there until the next touchdown
         if ev.kind == "touchdown":
             msg.event_type = StanceEvent.TOUCHDOWN
             msg.stance_index = len(stances)
