@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
-from hop_impedance.discovery.identify import identify
+from hop_impedance.discovery.identify import identify, surface_law
 from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial
 from hop_impedance.discovery.model import FittedLaw, ModelSpec
 from hop_impedance.simulation.ground import GroundLaw
@@ -33,12 +33,13 @@ from hop_impedance.simulation.stance_set import RIGID_NO_BOUNCE
 GAP_SIGNALS: tuple[str, ...] = ("grf",) + tuple(f"angle_{j}" for j in JOINT_NAMES) + tuple(f"moment_{j}" for j in JOINT_NAMES)
 
 
-def ground_of(spec: ModelSpec) -> GroundLaw:
-    """Surface law of the model: rigid (no bounce) or the identified ``k |y|^n - d y'``."""
-    if spec.compliance is None or spec.compliance[0] <= 0:
+def ground_of(spec: ModelSpec, s: MeasuredStance) -> GroundLaw:
+    """Surface law under stance ``s``: rigid (no bounce) or the identified ``k |y|^n - d y'``."""
+    law = surface_law(spec, s)
+    if law is None or law[0] <= 0:
         return RIGID_NO_BOUNCE
-    c, p = spec.compliance
-    return GroundLaw("identified", float(c ** (-1.0 / p)), float(1.0 / p), float(spec.ground_damping_n_s_m))
+    c, p, d = law
+    return GroundLaw("identified", float(c ** (-1.0 / p)), float(1.0 / p), float(d))
 
 
 def simulate_measured_stance(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: MeasuredStance) -> dict:
@@ -46,7 +47,7 @@ def simulate_measured_stance(spec: ModelSpec, coefs: np.ndarray, trial: Measured
     law = FittedLaw(spec, np.asarray(coefs, float))
     t_max = 2.0 * float(s.t_s[-1]) + 0.1
     try:
-        sim = simulate_stance(trial.chain, law, ground_of(spec), s.touchdown, t_max_s=t_max, rtol=1e-6, atol=1e-8,
+        sim = simulate_stance(trial.chain, law, ground_of(spec, s), s.touchdown, t_max_s=t_max, rtol=1e-6, atol=1e-8,
                               sample_times_s=s.t_s)
         end, n = sim.end_reason, len(sim.t_s)
     except RuntimeError as exc:  # integration failure: report, compare nothing

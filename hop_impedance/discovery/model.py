@@ -71,6 +71,12 @@ class ModelSpec:
         Toe displacement law ``-c Fz^p`` (m, N).
     ground_damping_n_s_m : float
         Surface damping for forward simulation (N s/m).
+    stiff_compliance : tuple (c, p, damping) or None
+        Law of the stiffer surface when the recording mixes two surfaces
+        (``compliance``/``ground_damping_n_s_m`` are then the softer one's).
+    surface_split : float or None
+        Stances whose :func:`~hop_impedance.discovery.identify.compliance_index`
+        is below this value stand on the stiffer surface.
     """
 
     effects: tuple[str, ...] = ()
@@ -81,6 +87,8 @@ class ModelSpec:
     offset_n: float = 0.0
     compliance: tuple[float, float] | None = None
     ground_damping_n_s_m: float = 0.0
+    stiff_compliance: tuple[float, float, float] | None = None
+    surface_split: float | None = None
 
     def with_effect(self, name: str, **params) -> "ModelSpec":
         """Copy with ``name`` appended and parameters replaced."""

@@ -97,6 +97,12 @@ def parameters_of(spec: ModelSpec, coefs: np.ndarray, effect: str | None) -> dic
         out = {"displacement_law": "toe dz = -c Fz^p", "c": c, "p": p,
                "stiffness_n_per_m_n": c ** (-1.0 / p) if c > 0 else None, "exponent_n": 1.0 / p,
                "damping_n_s_per_m": spec.ground_damping_n_s_m}
+        if spec.surface_split is not None:
+            c2, p2, d2 = spec.stiff_compliance
+            out["two_surfaces"] = {
+                "split_compliance_index": spec.surface_split,
+                "stiffer_surface": {"c": c2, "p": p2, "stiffness_n_per_m_n": c2 ** (-1.0 / p2) if c2 > 0 else None,
+                                    "exponent_n": 1.0 / p2, "damping_n_s_per_m": d2}}
     elif effect == "stream_latency":
         out = {"latency_s": spec.latency_s}
     else:
@@ -179,5 +185,7 @@ def discover(rec: Recording, *, forward: bool = True, max_steps: int = MAX_STEPS
     doc["effects_found"] = [st["effect"] for st in doc["steps"]]
     doc["final_model"] = {"effects": list(spec.effects), "parameters": parameters_of(spec_fit, coefs, None),
                           "latency_s": spec.latency_s, "offset_n": spec.offset_n,
-                          "compliance": list(spec.compliance) if spec.compliance else None}
+                          "compliance": list(spec.compliance) if spec.compliance else None,
+                          "stiff_compliance": list(spec.stiff_compliance) if spec.stiff_compliance else None,
+                          "surface_split": spec.surface_split}
     return doc

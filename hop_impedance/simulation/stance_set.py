@@ -30,7 +30,7 @@ Model (documented simplifications)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from scipy.interpolate import BPoly
@@ -39,6 +39,7 @@ from hop_impedance.biomech.body_model import body_model_from_stature
 from hop_impedance.recording import Recording, Subject
 from hop_impedance.simulation.dynamics import Chain, body_com, com_offset_jacobian, com_velocity, chain_from_body_model
 from hop_impedance.simulation.ground import GroundLaw, surface
+from hop_impedance.simulation.impedance_laws import CompositeLaw, Eq3Law, ImpedanceLaw, PushOff, TimeActivation
 from hop_impedance.simulation.hopping_trial import (
     Flight,
     HoppingConfig,
@@ -48,7 +49,16 @@ from hop_impedance.simulation.hopping_trial import (
     touchdown_posture,
     touchdown_state,
 )
-from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, SEED_SUBJECT, Effects, build_law
+from hop_impedance.simulation.scenarios import (
+    DEFAULT_TOUCHDOWN_RHO,
+    EXTRA_K2,
+    EXTRA_B1,
+    PUSH_OFF_WEIGHTS,
+    SEED_SUBJECT,
+    Effects,
+    build_law,
+    seed_stiffness,
+)
 from hop_impedance.simulation.sensors import SensorConfig, sample_recording
 from hop_impedance.simulation.stance import simulate_stance
 
@@ -59,6 +69,89 @@ RIGID_NO_BOUNCE = GroundLaw("rigid", 1.0e8, 1.5, 1.0e9, 1.5)
 def ground_law(name: str) -> GroundLaw:
     """Surface by name; ``"rigid"`` is :data:`RIGID_NO_BOUNCE`, others as :func:`surface`."""
     return RIGID_NO_BOUNCE if name == "rigid" else surface(name)
+
+
+@dataclass(frozen=True)
+class EffectSizes:
+    """Explicit, physically relevant magnitudes of the hidden effects (discovery test cases).
+
+    The simulator's default magnitudes (:mod:`hop_impedance.simulation.scenarios`)
+    were chosen to be illustrative, and some are at or below what any method
+    can see in a few noisy stances (``k3 = (3, 2, 1)`` contributes < 2 % of the
+    joint moment, ``b0 = 0.5`` ~2 %). A *hidden* effect in a test case must be
+    large enough to matter physically; these sizes say how large, and the
+    hit rates in ``docs/discovery.md`` hold at these sizes.
+
+    Attributes
+    ----------
+    rate_fraction : float
+        ``k3`` per joint is chosen so that ``max |k3 S|`` over a nominal stance
+        is this fraction of that joint's peak moment (``S = int (omega - omega0) omega dt``).
+    damping_b0_nm_s_rad : float
+        ``b0`` of every joint (N m s/rad).
+    activation_a_min, activation_tau_s : float
+        Seed 001 activation ``a(t) = a_min + (1 - a_min)(1 - exp(-t / tau))``.
+    push_fraction : float
+        Push-off amplitude at the ankle as a fraction of the nominal passive
+        stance's peak ankle moment; knee and hip get
+        :data:`~hop_impedance.simulation.scenarios.PUSH_OFF_WEIGHTS` of it.
+    """
+
+    rate_fraction: float = 0.15
+    damping_b0_nm_s_rad: float = 2.0
+    activation_a_min: float = 0.3
+    activation_tau_s: float = 0.05
+    push_fraction: float = 0.3
+
+    def to_dict(self) -> dict:
+        """Plain numbers for the truth file."""
+        return asdict(self)
+
+
+def _nominal_passive_stance(chain: Chain, law: ImpedanceLaw, ground: GroundLaw, rho_td, freq_hz: float):
+    speed, _ = nominal_touchdown_speed(chain, law, ground, rho_td, freq_hz)
+    q = touchdown_posture(chain, np.asarray(rho_td, float))
+    return simulate_stance(chain, law, ground, touchdown_state(chain, q, np.array([0.0, -speed]), 0.0),
+                           t_max_s=2.0 / freq_hz, rtol=1e-6, atol=1e-8)
+
+
+def sized_law(chain: Chain, freq_hz: float, effects: Effects, sizes: EffectSizes, ground: GroundLaw,
+              rho_td=DEFAULT_TOUCHDOWN_RHO) -> tuple[ImpedanceLaw, float]:
+    """The joint law of ``effects`` with the magnitudes of ``sizes``.
+
+    ``k0``, ``k1`` come from seed Table 2 (interpolated in frequency), ``k2`` and
+    ``b1`` keep the simulator's values. ``k3`` and the push-off amplitude are
+    scaled on one nominal passive stance (constant stiffness plus the other
+    switched effects) on ``ground``; the push-off is timed like the
+    simulator's (onset 35 %, duration 60 % of that stance).
+
+    Returns
+    -------
+    law : ImpedanceLaw
+        ``CompositeLaw((Eq3Law, [PushOff]))``; extensor positive.
+    nominal_stance_s : float
+        Duration (s) of the nominal stance of the final passive law.
+    """
+    k0, k1 = seed_stiffness(freq_hz)
+    eq3 = Eq3Law(
+        k0=k0,
+        k1=k1 if effects.angle_dependent_stiffness else 0.0,
+        k2=EXTRA_K2 if effects.quadratic_stiffness else 0.0,
+        b0=sizes.damping_b0_nm_s_rad if effects.damping else 0.0,
+        b1=EXTRA_B1 if effects.nonlinear_damping else 0.0,
+        activation=TimeActivation(sizes.activation_a_min, sizes.activation_tau_s) if effects.time_activation else None,
+    )
+    nominal = _nominal_passive_stance(chain, eq3, ground, rho_td, freq_hz)
+    if effects.rate_dependent_stiffness:
+        s_peak = np.max(np.abs(nominal.law_states), axis=0)
+        m_peak = np.max(np.abs(nominal.moments_nm), axis=0)
+        eq3 = replace(eq3, k3=sizes.rate_fraction * m_peak / np.maximum(s_peak, 1e-9))
+        nominal = _nominal_passive_stance(chain, eq3, ground, rho_td, freq_hz)
+    ts = nominal.duration_s
+    if not effects.push_off:
+        return CompositeLaw((eq3,)), ts
+    amp = sizes.push_fraction * float(np.max(nominal.moments_nm[:, 0])) * np.array(PUSH_OFF_WEIGHTS)
+    return CompositeLaw((eq3, PushOff(amp, 0.35 * ts, 0.6 * ts))), ts
 
 
 @dataclass(frozen=True)
@@ -118,6 +211,8 @@ def simulate_stance_set_recording(
     speed_sd: float = 0.05,
     push_sd: float = 0.05,
     rtol: float = 1e-7,
+    sizes: EffectSizes | None = None,
+    redraws: int = 0,
 ) -> tuple[Recording, dict]:
     """Recording of ``n_hops`` independently simulated stances (see module docstring).
 
@@ -137,33 +232,64 @@ def simulate_stance_set_recording(
     posture_sd_rad, speed_sd, push_sd : float
         Hop-to-hop variability of joint angles (rad), touchdown speed and
         push-off amplitude (fractions).
+    sizes : EffectSizes, optional
+        Explicit effect magnitudes (:func:`sized_law`); default: the
+        simulator's magnitudes (:func:`~hop_impedance.simulation.scenarios.build_law`).
+    redraws : int
+        A stance that does not take off (e.g. a soft, weakly activated body
+        that collapses) is re-drawn with a new touchdown state up to this
+        many times per hop (default 0: raise at once). Re-drawn hops are
+        counted in ``truth["redrawn_hops"]``.
 
     Returns
     -------
     recording : Recording
     truth : dict
         ``effects``, ``law``, ``surfaces``, ``sensors``, and per stance
-        ``touchdown_s``, ``takeoff_s``, ``surface``.
+        ``touchdown_s``, ``takeoff_s``, ``surface``; ``sizes`` (or None) and
+        ``redrawn_hops``.
 
     Raises
     ------
     ValueError
-        If a stance does not end in take-off.
+        If a stance does not end in take-off (after ``redraws`` re-draws).
     """
     if n_hops < 1:
         raise ValueError(f"n_hops must be at least 1, got {n_hops}")
     rng = np.random.default_rng(seed)
     chain = chain_from_body_model(body_model_from_stature(subject))
     laws = [ground_law(s) for s in surfaces]
-    passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0)
-    speed_nom, ts_nom = nominal_touchdown_speed(chain, passive, laws[0], touchdown_rho_rad, freq_hz)
-    law = build_law(freq_hz, effects, 0.35 * ts_nom, 0.6 * ts_nom)
+    if sizes is None:
+        passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0)
+        speed_nom, ts_nom = nominal_touchdown_speed(chain, passive, laws[0], touchdown_rho_rad, freq_hz)
+        law = build_law(freq_hz, effects, 0.35 * ts_nom, 0.6 * ts_nom)
+    else:
+        law, _ = sized_law(chain, freq_hz, effects, sizes, laws[0], touchdown_rho_rad)
+        passive = CompositeLaw(tuple(p for p in law.parts if not isinstance(p, PushOff)))
+        speed_nom, ts_nom = nominal_touchdown_speed(chain, passive, laws[0], touchdown_rho_rad, freq_hz)
     flight_nom = max(1.0 / freq_hz - ts_nom, 0.1)
-    tds = []
-    for i in range(n_hops):
+
+    def draw_touchdown():
         rho = np.asarray(touchdown_rho_rad, float) + rng.normal(0.0, posture_sd_rad, 3)
         speed = speed_nom * (1.0 + rng.normal(0.0, speed_sd))
-        tds.append(touchdown_state(chain, touchdown_posture(chain, rho), np.array([0.0, -speed]), 0.0))
+        return touchdown_state(chain, touchdown_posture(chain, rho), np.array([0.0, -speed]), 0.0)
+
+    tds = [draw_touchdown() for _ in range(n_hops)]
+    redrawn = 0
+    sims = []
+    for i in range(n_hops):
+        hop_law = scale_push_off(law, 1.0 + rng.normal(0.0, push_sd))
+        ground = laws[i % len(laws)]
+        for attempt in range(redraws + 1):
+            st = simulate_stance(chain, hop_law, ground, tds[i], t_max_s=2.0 / freq_hz, rtol=rtol, atol=rtol * 1e-2)
+            if st.end_reason == "take_off":
+                break
+            if attempt == redraws:
+                raise ValueError(f"hop {i}: stance ended by {st.end_reason} after {st.duration_s:.3f} s"
+                                 + (f" ({redraws} re-draws tried)" if redraws else ""))
+            tds[i] = draw_touchdown()
+            redrawn += 1
+        sims.append((st, ground, hop_law))
     lead = 0.4
     rest = np.array([tds[0].g[2:], np.zeros(4), np.zeros(4)])
     c_td = body_com(chain, tds[0].g)
@@ -172,13 +298,8 @@ def simulate_stance_set_recording(
     flights: list = [Flight(0.0, lead, com0, v_td - np.array([0.0, -chain.gravity_m_s2]) * lead,
                             BPoly.from_derivatives([0.0, lead], np.array([rest, rest])), chain.gravity_m_s2)]
     stances, t_td = [], lead
-    for i, td in enumerate(tds):
-        hop_law = scale_push_off(law, 1.0 + rng.normal(0.0, push_sd))
-        ground = laws[i % len(laws)]
-        st = simulate_stance(chain, hop_law, ground, td, t_max_s=2.0 / freq_hz, rtol=rtol, atol=rtol * 1e-2)
-        if st.end_reason != "take_off":
-            raise ValueError(f"hop {i}: stance ended by {st.end_reason} after {st.duration_s:.3f} s")
-        stances.append(StanceRecord(i, t_td, st, ground, hop_law, td))
+    for i, (st, ground, hop_law) in enumerate(sims):
+        stances.append(StanceRecord(i, t_td, st, ground, hop_law, tds[i]))
         t_to = t_td + st.duration_s
         nxt = tds[i + 1] if i + 1 < n_hops else tds[0]
         flights.append(_bridge(chain, t_to, flight_nom, st.g[-1], st.gd[-1], st.gdd[-1], nxt.g, nxt.gd))
@@ -191,6 +312,7 @@ def simulate_stance_set_recording(
         "generator": "hop_impedance.simulation.stance_set",
         "seed": seed, "freq_hz": freq_hz, "effects": effects.to_dict(), "law": law.to_dict(),
         "surfaces": list(surfaces), "sensors": sensors.to_dict(),
+        "sizes": sizes.to_dict() if sizes is not None else None, "redrawn_hops": redrawn,
         "stances": [{"touchdown_s": r.t_touchdown_s, "takeoff_s": r.t_takeoff_s, "surface": r.surface.name}
                     for r in stances],
     }
