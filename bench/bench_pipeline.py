@@ -1,0 +1,68 @@
+"""Pipeline benchmark: take-off-to-profile latency, CPU use and the highest loss-free replay rate.
+
+Runs the node graph in one process (EventsExecutor) on a bundled recording:
+
+1. real time (rate 1, 1 kHz force + 100 Hz markers), batch mode and low-latency mode:
+   latency from the arrival of the first force sample at/after take-off at
+   inverse_dynamics to the computed profile (p50, p99, from the estimator's
+   ``latency_s``), and the process CPU time per second of recording;
+2. fixed replay rates without flow control (10x, 20x, 40x, ...): messages lost
+   (file count minus received); the highest rate with zero loss is printed;
+   with flow control (rate 0) nothing is lost by construction, its speed-up is printed too.
+
+Usage: .venv/bin/python bench/bench_pipeline.py [REC.mcap]
+"""
+
+import os
+import resource
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+
+from hop_impedance.io.mcap_io import summarize  # noqa: E402
+from hop_impedance.nodes.runner import PipelineConfig, run_pipeline  # noqa: E402
+
+
+def cpu_s() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def run(rec: str, **kw):
+    with tempfile.TemporaryDirectory() as out:
+        c0, t0 = cpu_s(), time.monotonic()
+        report = run_pipeline(PipelineConfig(rec, out, timeout_s=120, **kw))
+        return report, cpu_s() - c0, time.monotonic() - t0
+
+
+def main() -> None:
+    rec = sys.argv[1] if len(sys.argv) > 1 else "recordings/sim_2p20hz_hard.mcap"
+    infos = {i.topic: i for i in summarize(rec)}
+    span = (infos["/force_plate/wrench"].last_ns - infos["/force_plate/wrench"].first_ns) * 1e-9
+    counts = {t: i.count for t, i in infos.items()}
+    print(f"recording {rec}: {span:.2f} s, {counts['/force_plate/wrench']} wrenches, {counts['/mocap/markers']} marker frames")
+    for low in (False, True):
+        report, cpu, wall = run(rec, rate=1.0, low_latency=low)
+        lat = np.array([p.latency_s for p in report.profiles if p.joint == "ankle"]) * 1e3
+        mode = "low-latency" if low else "batch"
+        print(f"real time, {mode:<11}: take-off->profile p50 {np.percentile(lat, 50):.1f} ms, p99 {np.percentile(lat, 99):.1f} ms "
+              f"(n={lat.size}); CPU {100 * cpu / wall:.0f} % of one core over {wall:.1f} s")
+    report, cpu, wall = run(rec, rate=0.0, publish_frames=True)
+    print(f"rate 0 (flow control): {span / wall:.1f}x real time incl. start-up, "
+          f"lost {counts['/force_plate/wrench'] - report.received('/inverse_dynamics', '/force_plate/wrench')} wrenches")
+    best = 0.0
+    for rate in (10.0, 20.0, 40.0, 80.0):
+        report, cpu, wall = run(rec, rate=rate)
+        lost = sum(counts[t] - report.received("/inverse_dynamics", t) for t in ("/force_plate/wrench", "/mocap/markers"))
+        print(f"rate {rate:>4.0f}x: {lost} messages lost, {len(report.summaries)} stance summaries, finished={report.finished}")
+        if lost == 0 and report.finished:
+            best = rate
+    print(f"highest fixed replay rate with zero loss: {best:.0f}x")
+
+
+if __name__ == "__main__":
+    main()
