@@ -38,6 +38,14 @@ setup(
     entry_points={
         "console_scripts": [
             "hop-impedance = hop_impedance.cli.main:main",
+            # One executable per node, so `ros2 run hop_impedance <node>` and launch_ros work
+            # after a colcon build (setup.cfg installs them into lib/hop_impedance).
+            "replay = hop_impedance.nodes.replay:main",
+            "stance_detector = hop_impedance.nodes.stance_detector:main",
+            "inverse_dynamics = hop_impedance.nodes.inverse_dynamics:main",
+            "impedance_estimator = hop_impedance.nodes.impedance_estimator:main",
+            "recorder = hop_impedance.nodes.recorder:main",
+            "rerun_bridge = hop_impedance.nodes.rerun_bridge:main",
         ],
     },
 )

@@ -1,40 +1,61 @@
 """Launch the hop_impedance pipeline with a full ROS 2 install (launch, launch_ros).
 
-    ros2 launch launch/pipeline.launch.py recording:=REC.mcap        # replay a recording
-    ros2 launch launch/pipeline.launch.py replay:=false               # live: drivers publish the inputs
+After ``colcon build`` of this repository (packages ``hop_impedance_msgs`` and
+``hop_impedance``) and ``source install/setup.bash``:
 
-Nodes run as ``python3 -m hop_impedance.nodes.<name>`` (the package is a plain
-Python package, not an ament package); parameters come from config/pipeline.yaml.
-Keep ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST unless the inputs come from another machine.
+    ros2 launch hop_impedance pipeline.launch.py recording:=/path/REC.mcap   # replay a recording
+    ros2 launch hop_impedance pipeline.launch.py replay:=false               # live: drivers publish the inputs
+
+Parameters come from ``config/pipeline.yaml`` (installed to the package's share
+folder). Keep ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST unless the inputs come
+from another machine. The PyPI wheels used by ``make demo`` carry no launch
+system; there ``hop-impedance pipeline`` starts the same nodes.
 """
 
-from pathlib import Path
+import os
 
+from ament_index_python.packages import get_package_share_directory
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, ExecuteProcess, SetEnvironmentVariable
+from launch.actions import DeclareLaunchArgument, SetEnvironmentVariable
 from launch.conditions import IfCondition
-from launch.substitutions import LaunchConfiguration
+from launch.substitutions import EnvironmentVariable, LaunchConfiguration
+from launch_ros.actions import Node
 
-ROOT = Path(__file__).resolve().parent.parent
-PARAMS = str(ROOT / "config" / "pipeline.yaml")
-
-
-def _node(name, *extra, condition=None):
-    cmd = ["python3", "-m", f"hop_impedance.nodes.{name}", "--ros-args", "--params-file", PARAMS, *extra]
-    return ExecuteProcess(cmd=cmd, name=name, output="screen", condition=condition)
+PACKAGE = "hop_impedance"
 
 
 def generate_launch_description():
+    params = os.path.join(get_package_share_directory(PACKAGE), "config", "pipeline.yaml")
+
+    def node(executable, condition=None, **overrides):
+        return Node(
+            package=PACKAGE,
+            executable=executable,
+            name=executable,
+            parameters=[params, overrides] if overrides else [params],
+            output="screen",
+            condition=condition,
+        )
+
     return LaunchDescription([
-        SetEnvironmentVariable("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"),
-        DeclareLaunchArgument("recording", default_value="recordings/sim_2p20hz_hard.mcap"),
-        DeclareLaunchArgument("rate", default_value="1.0"),
-        DeclareLaunchArgument("replay", default_value="true"),
-        DeclareLaunchArgument("output", default_value="session_out/pipeline.mcap"),
-        _node("stance_detector"),
-        _node("inverse_dynamics"),
-        _node("impedance_estimator"),
-        _node("recorder", "-p", ["output:=", LaunchConfiguration("output")]),
-        _node("replay", "-p", ["recording:=", LaunchConfiguration("recording")], "-p", ["rate:=", LaunchConfiguration("rate")],
-              condition=IfCondition(LaunchConfiguration("replay"))),
+        SetEnvironmentVariable(
+            "ROS_AUTOMATIC_DISCOVERY_RANGE",
+            EnvironmentVariable("ROS_AUTOMATIC_DISCOVERY_RANGE", default_value="LOCALHOST"),
+        ),
+        DeclareLaunchArgument("recording", default_value="", description="MCAP recording to replay"),
+        DeclareLaunchArgument("rate", default_value="1.0", description="replay speed factor (0 = as fast as the nodes take it)"),
+        DeclareLaunchArgument("replay", default_value="true", description="start the replay node (false when live)"),
+        DeclareLaunchArgument("output", default_value="session_out/pipeline.mcap", description="MCAP written by the recorder"),
+        DeclareLaunchArgument("rerun", default_value="false", description="also start the Rerun bridge"),
+        node("stance_detector"),
+        node("inverse_dynamics"),
+        node("impedance_estimator"),
+        node("recorder", output=LaunchConfiguration("output")),
+        node("rerun_bridge", condition=IfCondition(LaunchConfiguration("rerun"))),
+        node(
+            "replay",
+            condition=IfCondition(LaunchConfiguration("replay")),
+            recording=LaunchConfiguration("recording"),
+            rate=LaunchConfiguration("rate"),
+        ),
     ])
