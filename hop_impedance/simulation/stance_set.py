@@ -121,8 +121,9 @@ def sized_law(chain: Chain, freq_hz: float, effects: Effects, sizes: EffectSizes
 
     ``k0``, ``k1`` come from seed Table 2 (interpolated in frequency), ``k2`` and
     ``b1`` keep the simulator's values. ``k3`` and the push-off amplitude are
-    scaled on one nominal passive stance (constant stiffness plus the other
-    switched effects) on ``ground``; the push-off is timed like the
+    scaled on the nominal passive stance (at the nominal touchdown speed) on
+    ``ground``: ``k3`` by three fixed-point passes so that its share holds on
+    the stance *with* ``k3`` in (within a few %); the push-off is timed like the
     simulator's (onset 35 %, duration 60 % of that stance).
 
     Returns
@@ -142,7 +143,7 @@ def sized_law(chain: Chain, freq_hz: float, effects: Effects, sizes: EffectSizes
         activation=TimeActivation(sizes.activation_a_min, sizes.activation_tau_s) if effects.time_activation else None,
     )
     nominal = _nominal_passive_stance(chain, eq3, ground, rho_td, freq_hz)
-    if effects.rate_dependent_stiffness:
+    for _ in range(3 if effects.rate_dependent_stiffness else 0):  # fixed point: share measured *with* k3 in
         s_peak = np.max(np.abs(nominal.law_states), axis=0)
         m_peak = np.max(np.abs(nominal.moments_nm), axis=0)
         eq3 = replace(eq3, k3=sizes.rate_fraction * m_peak / np.maximum(s_peak, 1e-9))
