@@ -29,6 +29,17 @@ SEPARATING_EVIDENCE = {
         "every stance has the same angle-velocity course",
     frozenset({"joint_damping", "active_push_off"}):
         "separated by the time course: damping follows angular velocity, push-off has its own late-stance pulse",
+    frozenset({"rate_dependent_stiffness", "active_push_off"}):
+        "separated by net joint work and the time course: k3 S follows the stance's own angle-velocity course "
+        "and scales with touchdown speed, a push-off pulse is fixed in time since touchdown and adds energy; "
+        "in short stances (2.2 Hz) both are one late-stance bump and alias within noise",
+    frozenset({"rate_dependent_stiffness", "joint_damping"}):
+        "separated by residual correlation with angular velocity (damping, in phase) versus its integral "
+        "S = int (omega - omega0) omega dt (rate-dependent stiffness, lagging); energy loss per stance favours damping",
+    frozenset({"joint_damping", "time_dependent_activation"}):
+        "separated by the sign of the early-stance residual against angular velocity: damping adds moment while the "
+        "joint flexes fast, a low early activation removes it; with hops on two surfaces the activation's fixed "
+        "time course separates them",
     frozenset({"stream_latency", "force_plate_offset"}):
         "separated by flight: an offset shows as non-zero flight force, a latency only while the force changes",
 }
