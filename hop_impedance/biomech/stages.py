@@ -255,10 +255,9 @@ def pending_stance(detector: StanceDetector) -> Stance | None:
     """The stance whose take-off is confirmed but not yet in ``detector.stances``, or None.
 
     :class:`StanceDetector` keeps it aside until the next touchdown (to fill
-    ``baseline_after_n``); it has no public accessor yet, so this reads the
-    private attribute in one place.
+    ``baseline_after_n``); this is :attr:`StanceDetector.pending_stance`.
     """
-    return getattr(detector, "_pending_after", None)
+    return detector.pending_stance
 
 
 def missing_samples_reason(data: SpanData, touchdown_s: float, takeoff_s: float, max_gap_s: float) -> str | None:

@@ -177,6 +177,18 @@ class StanceDetector:
         """True while the state machine is in stance."""
         return self._state == "stance"
 
+    @property
+    def pending_stance(self) -> Stance | None:
+        """The stance whose take-off is confirmed but not yet in :attr:`stances`, or None.
+
+        A stance is appended to :attr:`stances` only at the next touchdown,
+        once the following flight's baseline (``baseline_after_n``) is known;
+        until then it waits here with ``baseline_after_n`` NaN. Streaming
+        consumers that act at take-off (the pipeline's low-latency mode and
+        its take-off events) read it from here.
+        """
+        return self._pending_after
+
     def push(self, t_s: np.ndarray, fz_n: np.ndarray) -> list[ContactEvent]:
         """Feed samples; return the events they complete.
 

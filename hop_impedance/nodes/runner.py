@@ -2,8 +2,10 @@
 
 ``run_pipeline`` starts the node graph either in this process (one
 EventsExecutor spinning every node) or as separate processes
-(``python -m hop_impedance.nodes.<name> --ros-args -p ...``, inheriting the
-environment, so ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` carries over),
+(``python -m hop_impedance.nodes.<name> --ros-args -p ...`` with
+:func:`hop_impedance.child_env.child_env`: the environment without the ROS
+wheels' bootstrap marker, so each child re-derives ``LD_LIBRARY_PATH``, and
+with ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``),
 plus a :class:`ResultCollector` in this process that gathers what the
 pipeline publishes. It returns when the stream has been played and every
 stance result has reached the collector and the recorder, or at the time
@@ -23,6 +25,7 @@ from pathlib import Path
 
 from rclpy.node import Node
 
+from hop_impedance.child_env import child_env
 from hop_impedance.nodes.common import (
     CONTROLLER_TOPIC, DIAGNOSTICS_TOPIC, PROFILE_TOPIC, PROGRESS_TOPIC, SUMMARY_TOPIC, stamp_ns,
 )
@@ -247,12 +250,12 @@ def _yaml(v) -> str:
 
 
 def start_children(names, cfg: PipelineConfig, log_dir: Path) -> dict[str, subprocess.Popen]:
-    """Start node processes (environment inherited); stdout/stderr to ``log_dir/<name>.log``."""
+    """Start node processes (``child_env()``: inherited environment minus the bootstrap marker); stdout/stderr to ``log_dir/<name>.log``."""
     params = node_parameters(cfg)
     children = {}
     for name in names:
         log = open(log_dir / f"{name}.log", "w")  # noqa: SIM115 - closed with the process
-        children[name] = subprocess.Popen(child_command(name, params[name], cfg.params_file), env=dict(os.environ),
+        children[name] = subprocess.Popen(child_command(name, params[name], cfg.params_file), env=child_env(),
                                           stdout=log, stderr=subprocess.STDOUT)
         log.close()
     return children
