@@ -4,7 +4,17 @@ Replays the bundled recording through the whole ROS 2 node graph in one
 process (EventsExecutor; ``--processes`` for one process per node) as fast as
 the nodes take it without loss, prints the per-stance table (touchdown,
 contact time, ankle/knee/hip k0, k1 and R^2, status) and writes
-``OUT/pipeline.mcap`` with the inputs and every output topic.
+``OUT/pipeline.mcap`` with the inputs and every output topic, then writes the
+Rerun view of the recording to ``demo.rrd`` (``--rrd``; repository root under
+``make demo``, removed by ``make clean``) with
+:func:`hop_impedance.viz.session.write_rrd` and says how to open it.
+
+Choice: ``write_rrd`` re-runs the offline analysis and fits (~2 s) instead of
+converting the pipeline's messages: the offline view is the reference view
+(same entities and blueprint as ``hop-impedance view``), and the end-to-end
+test shows the pipeline's coefficients equal the offline ones within
+2e-3 relative. ``hop-impedance pipeline --rerun-save`` writes the live
+pipeline's own view instead.
 """
 
 from __future__ import annotations
@@ -22,6 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "stance and write the output MCAP.",
     )
     add_pipeline_arguments(p, default_recording="recordings/sim_2p20hz_hard.mcap")
+    p.add_argument("--rrd", default="demo.rrd", help="write the Rerun view here ('' = none) [demo.rrd]")
     p.set_defaults(func=run, out="demo_out", timeout=60.0)
 
 
@@ -31,4 +42,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"replaying {args.recording} through replay -> stance_detector, inverse_dynamics -> "
           f"impedance_estimator -> recorder ({'separate processes' if args.processes else 'one process'})")
     report = run_pipeline(config_from_args(args))
-    return print_report(report, args.recording)
+    code = print_report(report, args.recording)
+    if args.rrd:
+        from hop_impedance.viz.session import write_rrd
+
+        summary = write_rrd(args.recording, None, None, args.rrd)
+        print(f"Rerun view ({summary.stances} stances, {summary.fitted_stances} fitted): {args.rrd}; "
+              f"open it with: .venv/bin/rerun {args.rrd}")
+    return code

@@ -32,7 +32,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_pipeline_arguments(p)
     p.add_argument("--loop", action="store_true", help="replay in a loop (until --timeout)")
-    p.add_argument("--rerun", action="store_true", help="add the Rerun bridge node (if installed)")
+    p.add_argument("--rerun", action="store_true", help="add the Rerun bridge node (spawns a viewer unless --rerun-save/--rerun-url)")
+    p.add_argument("--rerun-save", metavar="OUT.rrd", help="the Rerun bridge writes this .rrd (implies --rerun; works headless)")
+    p.add_argument("--rerun-url", metavar="URL", help="the Rerun bridge streams to this viewer, e.g. rerun+http://127.0.0.1:9876/proxy")
     p.set_defaults(func=run)
 
 
@@ -42,6 +44,7 @@ def config_from_args(args: argparse.Namespace):
     return PipelineConfig(
         recording=args.recording, out_dir=args.out, rate=args.rate, processes=args.processes,
         low_latency=args.low_latency, publish_frames=not args.no_frames, rerun=getattr(args, "rerun", False),
+        rerun_save=getattr(args, "rerun_save", None), rerun_url=getattr(args, "rerun_url", None),
         timeout_s=args.timeout, params_file=args.params_file, loop=getattr(args, "loop", False),
     )
 
@@ -61,6 +64,8 @@ def print_report(report, recording: str) -> int:
           f"take-off to profile p50/p99: {report.diag(est, 'takeoff_to_profile_p50_ms', '?')}/"
           f"{report.diag(est, 'takeoff_to_profile_p99_ms', '?')} ms")
     print(f"output: {report.output_mcap}  ({report.wall_s:.1f} s wall)")
+    if getattr(report, "rrd", None):
+        print(f"Rerun recording: {report.rrd}  (open it with: .venv/bin/rerun {report.rrd})")
     if not report.finished:
         print("pipeline did not finish in time (see the losses above and the logs)")
         return 1

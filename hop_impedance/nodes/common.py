@@ -272,6 +272,7 @@ def spin_node(node_factory, args=None) -> None:
     from rclpy.executors import ExternalShutdownException
 
     with rclpy.init(args=args):
+        node = None
         try:
             node = node_factory()
             executor = make_executor()
@@ -279,6 +280,9 @@ def spin_node(node_factory, args=None) -> None:
             spin_until_shutdown(executor)
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
+        finally:
+            if node is not None:
+                node.destroy_node()  # nodes with files (rerun_bridge, recorder) close them here
 
 
 def spin_until_shutdown(executor) -> None:

@@ -55,7 +55,12 @@ class PipelineConfig:
     publish_frames : bool
         Per-frame JointKinetics.
     rerun : bool
-        Add the Rerun bridge node (if installed).
+        Add the Rerun bridge node (``nodes/rerun_bridge.py``).
+    rerun_save : str or None
+        The bridge writes this .rrd file (implies ``rerun``); headless-safe.
+    rerun_url : str or None
+        The bridge streams to a running viewer at this address (implies ``rerun``).
+        With ``rerun`` and neither given, the bridge spawns a viewer on loopback.
     timeout_s : float
         Give up (and report) after this long.
     params_file : str or None
@@ -69,9 +74,16 @@ class PipelineConfig:
     low_latency: bool = False
     publish_frames: bool = True
     rerun: bool = False
+    rerun_save: str | None = None
+    rerun_url: str | None = None
     timeout_s: float = 120.0
     params_file: str | None = None
     loop: bool = False
+
+    @property
+    def with_rerun(self) -> bool:
+        """Whether the Rerun bridge runs."""
+        return bool(self.rerun or self.rerun_save or self.rerun_url)
 
     @property
     def output_mcap(self) -> str:
@@ -90,6 +102,7 @@ class PipelineReport:
     wall_s: float = 0.0
     finished: bool = False
     output_mcap: str = ""
+    rrd: str = ""
 
     def received(self, node: str, topic: str) -> int:
         """Messages of ``topic`` the node ``node`` reported received (0 if unknown)."""
@@ -142,6 +155,8 @@ def node_parameters(cfg: PipelineConfig) -> dict[str, dict]:
         "inverse_dynamics": {"low_latency": bool(cfg.low_latency), "publish_frames": bool(cfg.publish_frames)},
         "impedance_estimator": {},
         "recorder": {"output": cfg.output_mcap, "copy_inputs_from": str(cfg.recording)},
+        "rerun_bridge": {"save_path": str(cfg.rerun_save or ""), "viewer_url": str(cfg.rerun_url or ""),
+                         "spawn": not (cfg.rerun_save or cfg.rerun_url)},
     }
 
 
@@ -180,19 +195,19 @@ def _in_process_nodes(cfg: PipelineConfig, context) -> list[Node]:
     nodes = []
     for name, cls in classes.items():
         nodes.append(cls(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in params[name].items()]))
-    if cfg.rerun:
-        nodes.extend(_rerun_nodes(context))
+    if cfg.with_rerun:
+        nodes.extend(_rerun_nodes(context, params["rerun_bridge"]))
     nodes.append(ReplayNode(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in params["replay"].items()]))
     return nodes
 
 
-def _rerun_nodes(context) -> list[Node]:
-    try:
-        from hop_impedance.nodes.rerun_bridge import RerunBridge
-    except ImportError as exc:
-        print(f"hop-impedance pipeline: --rerun ignored: {exc}", file=sys.stderr)
-        return []
-    return [RerunBridge(context=context)]
+def _rerun_nodes(context, params: dict) -> list[Node]:
+    """The Rerun bridge (imported lazily: rerun-sdk is only needed with ``--rerun``)."""
+    from rclpy.parameter import Parameter
+
+    from hop_impedance.nodes.rerun_bridge import RerunBridge
+
+    return [RerunBridge(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in params.items()])]
 
 
 def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
@@ -209,6 +224,7 @@ def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
         for n in nodes:
             executor.add_node(n)
         _spin_until_done(executor, collector, cfg, t0)
+        _wait_for_bridge(executor, nodes, len(collector.report.summaries))
         replay = nodes[-1]
         replay.stop()
         if replay.error:
@@ -220,7 +236,16 @@ def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
         rclpy.shutdown(context=context)
     report.wall_s = time.monotonic() - t0
     report.output_mcap = cfg.output_mcap
+    report.rrd = str(cfg.rerun_save or "")
     return report
+
+
+def _wait_for_bridge(executor, nodes: list[Node], n_stances: int, timeout_s: float = 5.0) -> None:
+    """If a Rerun bridge runs in this process, spin until it has logged ``n_stances`` stances (bounded)."""
+    bridges = [n for n in nodes if n.get_name() == "rerun_bridge"]
+    deadline = time.monotonic() + timeout_s
+    while bridges and bridges[0].stances_logged < n_stances and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.05)
 
 
 def _executor_for(context):
@@ -288,7 +313,8 @@ def _run_processes(cfg: PipelineConfig) -> PipelineReport:
         collector = ResultCollector(context=context)
         executor = _executor_for(context)
         executor.add_node(collector)
-        children = start_children(NODE_MODULES, cfg, log_dir)
+        names = NODE_MODULES[:-1] + ("rerun_bridge",) + NODE_MODULES[-1:] if cfg.with_rerun else NODE_MODULES
+        children = start_children(names, cfg, log_dir)
 
         def alive() -> None:
             for name, p in children.items():
@@ -303,6 +329,7 @@ def _run_processes(cfg: PipelineConfig) -> PipelineReport:
         rclpy.shutdown(context=context)
     report.wall_s = time.monotonic() - t0
     report.output_mcap = cfg.output_mcap
+    report.rrd = str(cfg.rerun_save or "")
     return report
 
 
