@@ -8,11 +8,33 @@ Problem (one joint, one stance, p active parameters)::
 Scaling: the columns of X differ by orders of magnitude (k2 multiplies rad^3,
 b2 (rad/s)^3), so the QP is solved in ``theta_s = s * theta / |tau|`` with
 ``s`` the column norms of X, and each constraint row is normalised to unit
-norm. OSQP then sees an objective of order 1 and unit-norm rows, converges to
-``eps_abs = eps_rel = 1e-9`` or is polished (exact solution of the KKT system
-of the identified active set). The solution is unscaled before it is returned. Only OSQP status ``solved`` counts as converged; anything else
-("solved inaccurate", "maximum iterations reached", "primal infeasible", ...)
-is reported so the caller can reject the stance.
+norm. OSQP then sees an objective of order 1 and unit-norm rows.
+
+Working set (constraint generation, the fast path of :meth:`ConstrainedLeastSquares.solve`)
+----------------------------------------------------------------------------------------
+A has four rows per sample (K >= 0, B >= 0, E_s >= 0, P_d <= 0), ~300 rows
+for 2-9 unknowns, and neighbouring samples give nearly identical rows. On the
+full row set OSQP needs 1000-3000 ADMM iterations when constraints are active
+and its polishing often fails on the near-duplicate rows. Instead:
+
+1. start from the unconstrained optimum and an empty working set W;
+2. solve the QP with only the rows in W with OSQP (warm-started, polished);
+3. evaluate every row at that solution; for each run of consecutive violated
+   rows add its most violated row to W; stop when no row is violated by more
+   than OSQP's own feasibility tolerance ``eps_abs + eps_rel * max|A x|``.
+
+The QP on W is a relaxation of the full QP, so its optimum, once feasible for
+every row, is the optimum of the full QP (exact at convergence, up to the
+tolerance above). OSQP solves every working-set QP (it is the solver of
+record); it is run at least once even when the unconstrained optimum is
+feasible. If W would exceed ``max_working_rows``, the loop exceeds
+``max_rounds``, or a working-set solve does not converge, the full row set is
+solved as before (:meth:`ConstrainedLeastSquares.solve_all_rows`: ADMM to
+``coarse_eps`` + polishing, else ADMM to ``eps``), so a stance is rejected
+only when OSQP fails on the full problem. Only OSQP status ``solved`` counts as
+converged; anything else ("solved inaccurate", "maximum iterations reached",
+...) is reported so the caller can reject the stance. ``theta = 0`` satisfies
+every row, so the problem is never primal infeasible.
 """
 
 from __future__ import annotations
@@ -22,6 +44,12 @@ from dataclasses import dataclass
 import numpy as np
 import osqp
 from scipy import sparse
+
+#: OSQP's algebra backend. Named explicitly: without it every ``osqp.OSQP()``
+#: tries to import the CUDA and MKL backends first (~1-2 ms per workspace).
+OSQP_ALGEBRA = "builtin"
+#: OSQP's representation of an infinite bound.
+OSQP_INFINITY = 1e30
 
 
 @dataclass(frozen=True)
@@ -39,11 +67,15 @@ class QpSolution:
     sse : float
         Sum of squared residuals J (N^2 m^2).
     iterations : int
-        ADMM iterations.
+        ADMM iterations (summed over the working-set solves).
     polished : bool
-        True when OSQP's polishing step succeeded.
+        True when OSQP's polishing step succeeded (last solve).
     n_active : int
         Constraints active at the solution (scaled slack below 1e-7).
+    working_rows : int
+        Rows in the final working set; -1 when the full row set was solved.
+    rounds : int
+        OSQP solves on working sets (0 when only the full row set was solved).
     """
 
     coefficients: np.ndarray
@@ -53,15 +85,23 @@ class QpSolution:
     iterations: int
     polished: bool
     n_active: int
+    working_rows: int = -1
+    rounds: int = 0
 
 
 def _upper_csc(matrix: np.ndarray) -> sparse.csc_matrix:
     """Upper triangle of a dense square matrix as CSC with a full, fixed pattern."""
     p = matrix.shape[0]
-    rows = np.concatenate([np.arange(j + 1) for j in range(p)])
-    cols = np.concatenate([np.full(j + 1, j) for j in range(p)])
+    rows, cols = np.triu_indices(p)
+    order = np.lexsort((rows, cols))  # column-major
+    rows, cols = rows[order], cols[order]
     indptr = np.concatenate([[0], np.cumsum(np.arange(1, p + 1))])
     return sparse.csc_matrix((matrix[rows, cols], rows, indptr), shape=(p, p))
+
+
+def _upper_values(matrix: np.ndarray) -> np.ndarray:
+    """Column-major upper-triangle values of a square matrix (data of :func:`_upper_csc`)."""
+    return matrix.T[np.tril_indices(matrix.shape[0])]
 
 
 def _dense_csc(matrix: np.ndarray) -> sparse.csc_matrix:
@@ -72,28 +112,57 @@ def _dense_csc(matrix: np.ndarray) -> sparse.csc_matrix:
     return sparse.csc_matrix((matrix.ravel(order="F"), indices, indptr), shape=(m, p))
 
 
+def _most_violated_per_run(slack: np.ndarray, violated: np.ndarray) -> np.ndarray:
+    """Index of the smallest slack in each run of consecutive violated rows, shape (runs,).
+
+    Neighbouring samples give nearly identical rows, so one row per run is
+    added at a time (adding whole runs makes the working set degenerate).
+    """
+    index = np.flatnonzero(violated)
+    runs = np.split(index, np.flatnonzero(np.diff(index) > 1) + 1)
+    return np.array([run[np.argmin(slack[run])] for run in runs], dtype=int)
+
+
 class ConstrainedLeastSquares:
     """Reusable OSQP solver for Eq. 6 under ``A theta >= 0``.
 
-    Keep one instance per joint: when consecutive problems have the same shape
-    (same number of parameters and constraint rows) the OSQP workspace is
-    updated instead of rebuilt, and every solve is warm-started from the last
-    scaled solution of the same number of parameters.
+    Keep one instance per joint: OSQP workspaces are kept per problem size
+    and updated instead of rebuilt, and solves are warm-started.
 
     Parameters
     ----------
     eps : float
-        OSQP ``eps_abs`` and ``eps_rel`` on the scaled problem.
+        OSQP ``eps_abs`` and ``eps_rel`` on the scaled problem (also the
+        feasibility tolerance of the working-set check).
     max_iter : int
-        OSQP iteration limit; reaching it is reported as not converged.
+        OSQP iteration limit per solve; reaching it is reported as not converged.
     coarse_eps : float
         Tolerance of the first ADMM stage, whose result is accepted only when
         OSQP's polishing succeeds (exact active-set solution) or no
         constraint is active; otherwise ADMM continues to ``eps``.
+    working_set : bool
+        Use the working-set path (module docstring); False always solves the
+        full row set.
+    max_working_rows : int
+        Working-set capacity (rows); more rows fall back to the full set.
+    max_rounds : int
+        Working-set solves before falling back to the full set.
     """
 
-    def __init__(self, eps: float = 1e-9, max_iter: int = 20000, coarse_eps: float = 1e-5) -> None:
+    def __init__(
+        self,
+        eps: float = 1e-9,
+        max_iter: int = 20000,
+        coarse_eps: float = 1e-5,
+        working_set: bool = True,
+        max_working_rows: int = 16,
+        max_rounds: int = 12,
+    ) -> None:
+        self.eps = eps
         self.coarse_eps = coarse_eps
+        self.working_set = working_set
+        self.max_working_rows = max_working_rows
+        self.max_rounds = max_rounds
         self.settings = dict(
             eps_abs=eps,
             eps_rel=eps,
@@ -104,9 +173,49 @@ class ConstrainedLeastSquares:
         self._solver: osqp.OSQP | None = None
         self._shape: tuple[int, int] | None = None
         self._last_x: dict[int, np.ndarray] = {}
+        self._small: dict[int, osqp.OSQP] = {}
 
+    # -- problem scaling -------------------------------------------------
+    @staticmethod
+    def _scaled(design, target, constraints):
+        X = np.asarray(design, float)
+        y = np.asarray(target, float)
+        col_norm = np.sqrt(np.einsum("ij,ij->j", X, X))
+        y_norm = float(np.sqrt(y @ y))
+        if np.any(col_norm == 0.0) or y_norm == 0.0:
+            raise ValueError("constrained fit needs non-zero regressor columns and a non-zero moment")
+        Xs = X / col_norm
+        ys = y / y_norm
+        P = Xs.T @ Xs
+        q = -(Xs.T @ ys)
+        p = X.shape[1]
+        A = np.asarray(constraints, float).reshape(-1, p) / col_norm
+        row_norm = np.sqrt(np.einsum("ij,ij->i", A, A))
+        A = A / np.where(row_norm > 0.0, row_norm, 1.0)[:, None]
+        return X, y, Xs, ys, P, q, A, col_norm, y_norm
+
+    def _result(self, X, y, A, xs, status, iterations, polished, y_norm, col_norm, working_rows, rounds):
+        converged = status == "solved" and bool(np.all(np.isfinite(xs)))
+        theta = xs * y_norm / col_norm
+        residual = y - X @ theta if np.all(np.isfinite(theta)) else np.full_like(y, np.nan)
+        slack = A @ xs if A.shape[0] else np.zeros(0)
+        return QpSolution(
+            coefficients=theta,
+            status=status,
+            converged=bool(converged),
+            sse=float(residual @ residual),
+            iterations=int(iterations),
+            polished=bool(polished),
+            n_active=int(np.sum(slack < 1e-7)) if converged else 0,
+            working_rows=working_rows,
+            rounds=rounds,
+        )
+
+    # -- public solves ---------------------------------------------------
     def solve(self, design: np.ndarray, target: np.ndarray, constraints: np.ndarray) -> QpSolution:
         """Minimise ``|target - design @ theta|^2`` subject to ``constraints @ theta >= 0``.
+
+        Working-set path (module docstring) with fallback to :meth:`solve_all_rows`.
 
         Parameters
         ----------
@@ -121,22 +230,111 @@ class ConstrainedLeastSquares:
         -------
         QpSolution
         """
-        X = np.asarray(design, float)
-        y = np.asarray(target, float)
-        col_norm = np.linalg.norm(X, axis=0)
-        y_norm = float(np.linalg.norm(y))
-        if np.any(col_norm == 0.0) or y_norm == 0.0:
-            raise ValueError("constrained fit needs non-zero regressor columns and a non-zero moment")
-        Xs = X / col_norm
-        ys = y / y_norm
-        P = Xs.T @ Xs
-        q = -(Xs.T @ ys)
+        if not self.working_set:
+            return self.solve_all_rows(design, target, constraints)
+        X, y, Xs, ys, P, q, A, col_norm, y_norm = self._scaled(design, target, constraints)
         p = X.shape[1]
-        A = np.asarray(constraints, float).reshape(-1, p) / col_norm
+        x = np.linalg.lstsq(Xs, ys, rcond=None)[0]
+        work = np.zeros(0, dtype=int)
+        duals = np.zeros(0)
+        iterations, rounds = 0, 0
+        solver = self._small_solver(p)
+        P_upper = _upper_values(P)
+        while True:
+            slack = A @ x
+            tol = self.eps + self.eps * (float(np.abs(slack).max()) if slack.size else 0.0)
+            violated = slack < -tol
+            violated[work] = False
+            if rounds > 0 and not violated.any():
+                return self._result(X, y, A, x, "solved", iterations, polished, y_norm, col_norm, work.size, rounds)
+            if violated.any():
+                work = np.concatenate((work, _most_violated_per_run(slack, violated)))
+            if work.size > self.max_working_rows or rounds >= self.max_rounds:
+                break
+            status, x_new, duals, iters, polished = self._solve_rows(solver, P_upper, q, A[work], x, duals)
+            iterations += iters
+            rounds += 1
+            if status != "solved" or not np.all(np.isfinite(x_new)):
+                break
+            x = x_new
+        return self.solve_all_rows(design, target, constraints)
+
+    def _small_solver(self, p: int) -> osqp.OSQP:
+        """OSQP workspace for p unknowns and ``max_working_rows`` rows (dense pattern), cached per p."""
+        solver = self._small.get(p)
+        if solver is None:
+            m = self.max_working_rows
+            solver = osqp.OSQP(algebra=OSQP_ALGEBRA)
+            solver.setup(
+                _upper_csc(np.eye(p)),
+                np.zeros(p),
+                _dense_csc(np.ones((m, p))),
+                np.full(m, -OSQP_INFINITY),
+                np.full(m, OSQP_INFINITY),
+                **{**self.settings, "polishing": True},
+            )
+            self._small[p] = solver
+        return solver
+
+    def _solve_rows(self, solver, P_upper, q, rows, x0, y0):
+        """One OSQP solve of the scaled QP with ``rows @ x >= 0`` (padded with free rows).
+
+        Two stages as in :meth:`solve_all_rows`: ADMM to ``coarse_eps`` plus
+        polishing (exact KKT solution of the identified active set), accepted
+        when polishing succeeded and every multiplier has the sign of an
+        active lower bound (OSQP's y <= 0; a positive y means a wrongly
+        guessed active row, i.e. a feasible but not optimal point); otherwise
+        ADMM continues to ``eps`` and is polished and checked again. Polishing
+        is off for an empty working set (nothing can be active, and OSQP would
+        print "Polishing not needed"); a non-empty set always has an active
+        row at its optimum, because its first rows are violated by the
+        unconstrained optimum.
+
+        Returns
+        -------
+        status : str
+            ``"solved"`` only for an exact (polished, sign-checked) solution.
+        x : ndarray, shape (p,)
+        y : ndarray, shape (k,)
+            OSQP multipliers of the working rows (warm start of the next round).
+        iterations : int
+        polished : bool
+        """
+        m, p, k = self.max_working_rows, q.size, rows.shape[0]
+        A = np.zeros((m, p))
+        A[:k] = rows
+        lower = np.full(m, -OSQP_INFINITY)
+        lower[:k] = 0.0
+        solver.update(Px=P_upper, q=q, Ax=A.ravel(order="F"), l=lower)
+        solver.update_settings(polishing=k > 0, eps_abs=self.coarse_eps, eps_rel=self.coarse_eps)
+        y_start = np.zeros(m)
+        y_start[: y0.size] = y0
+        solver.warm_start(x=x0, y=y_start)
+        iterations = 0
+        for stage in range(2):
+            result = solver.solve(raise_error=False)
+            iterations += int(result.info.iter)
+            status = str(result.info.status)
+            polished = int(result.info.status_polish) == 1
+            duals = np.asarray(result.y, float)[:k]
+            right_signs = not np.any(duals > self.eps * max(1.0, float(np.abs(duals).max(initial=0.0))))
+            if status == "solved" and (k == 0 or (polished and right_signs)):
+                break
+            solver.update_settings(eps_abs=self.eps, eps_rel=self.eps)
+        else:
+            if status == "solved":  # not exact: the caller solves the full row set instead
+                status = "solved, not polished" if not polished else "solved with wrong-sign multipliers"
+        return status, np.asarray(result.x, float), np.asarray(result.y, float)[:k], iterations, polished
+
+    def solve_all_rows(self, design: np.ndarray, target: np.ndarray, constraints: np.ndarray) -> QpSolution:
+        """The same QP with every constraint row given to OSQP (reference and fallback path).
+
+        Parameters and return as :meth:`solve`.
+        """
+        X, y, Xs, ys, P, q, A, col_norm, y_norm = self._scaled(design, target, constraints)
+        p = X.shape[1]
         if A.shape[0] == 0:
             A = np.zeros((1, p))  # keep OSQP's interface: one void row 0 <= 0 <= inf
-        row_norm = np.linalg.norm(A, axis=1)
-        A = A / np.where(row_norm > 0.0, row_norm, 1.0)[:, None]
         lower = np.zeros(A.shape[0])
         upper = np.full(A.shape[0], np.inf)
 
@@ -151,7 +349,7 @@ class ConstrainedLeastSquares:
             self._solver.update(Px=P_csc.data, q=q, Ax=A_csc.data, l=lower, u=upper)
             self._solver.update_settings(polishing=not ols_feasible)
         else:
-            self._solver = osqp.OSQP()
+            self._solver = osqp.OSQP(algebra=OSQP_ALGEBRA)
             self._solver.setup(P_csc, q, A_csc, lower, upper, **{**self.settings, "polishing": not ols_feasible})
             self._shape = shape
         if ols_feasible or p not in self._last_x:
@@ -169,18 +367,8 @@ class ConstrainedLeastSquares:
             result = self._solver.solve(raise_error=False)
         status = str(result.info.status)
         xs = np.asarray(result.x, float)
-        converged = status == "solved" and np.all(np.isfinite(xs))
-        if converged:
+        if status == "solved" and np.all(np.isfinite(xs)):
             self._last_x[p] = xs.copy()
-        theta = xs * y_norm / col_norm
-        residual = y - X @ theta if np.all(np.isfinite(theta)) else np.full_like(y, np.nan)
-        slack = A @ xs
-        return QpSolution(
-            coefficients=theta,
-            status=status,
-            converged=bool(converged),
-            sse=float(residual @ residual),
-            iterations=int(result.info.iter),
-            polished=int(result.info.status_polish) == 1,
-            n_active=int(np.sum(slack < 1e-7)) if converged else 0,
+        return self._result(
+            X, y, A, xs, status, result.info.iter, int(result.info.status_polish) == 1, y_norm, col_norm, -1, 0
         )
