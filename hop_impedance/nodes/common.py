@@ -218,8 +218,9 @@ def _fmt(v) -> str:
 class ProgressReporter:
     """Publishes the node's consumed stamps on ``/pipeline/progress`` (flow control of the replay).
 
-    Published at most every ``period_s`` and only when something changed,
-    plus at once on :meth:`publish` (e.g. after a flush).
+    Published at most every ``period_s`` when something changed, at least
+    every ``heartbeat_s`` (so the replay can tell a busy consumer from a dead
+    one), and at once on :meth:`publish` (e.g. after a flush).
     """
 
     def __init__(self, node: Node, trackers: dict[str, InputTracker], period_s: float = 0.01) -> None:
@@ -232,6 +233,8 @@ class ProgressReporter:
         self.finished = False
         self.stances_out = 0
         self._last_sent: tuple | None = None
+        self._last_wall = 0.0
+        self.heartbeat_s = 0.5
         self.pub = node.create_publisher(Progress, PROGRESS_TOPIC, result_qos(50))
         self.timer = node.create_timer(period_s, self._tick)
 
@@ -240,7 +243,7 @@ class ProgressReporter:
                 tuple(t.received for t in self.trackers.values()))
 
     def _tick(self) -> None:
-        if self._state() != self._last_sent:
+        if self._state() != self._last_sent or time.monotonic() - self._last_wall > self.heartbeat_s:
             self.publish()
 
     def publish(self) -> None:
@@ -259,6 +262,7 @@ class ProgressReporter:
         msg.last_stamps = stamps
         msg.received = [t.received for t in self.trackers.values()]
         self._last_sent = self._state()
+        self._last_wall = time.monotonic()
         self.pub.publish(msg)
 
 

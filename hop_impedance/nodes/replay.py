@@ -140,7 +140,10 @@ class ReplayNode(Node):
             self._publisher(topic, schema)
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline and not self._stop.is_set():
-            if all(p.get_subscription_count() > 0 for t, p in self._pubs.items() if t != SUBJECT_TOPIC):
+            # With consumers: also wait for their first /pipeline/progress report, i.e. they are
+            # spinning; under load a reader matched late loses the first samples of a volatile topic.
+            reported = all(c in self.progress for c in self.consumers)
+            if reported and all(p.get_subscription_count() > 0 for t, p in self._pubs.items() if t != SUBJECT_TOPIC):
                 time.sleep(0.2)  # let the matched readers finish their handshake
                 return
             time.sleep(0.02)

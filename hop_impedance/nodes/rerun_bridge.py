@@ -275,3 +275,7 @@ def main(args=None) -> None:
     from hop_impedance.nodes.common import spin_node
 
     spin_node(RerunBridge, args)
+
+
+if __name__ == "__main__":
+    main()

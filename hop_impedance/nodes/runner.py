@@ -27,7 +27,7 @@ from rclpy.node import Node
 
 from hop_impedance.child_env import child_env
 from hop_impedance.nodes.common import (
-    CONTROLLER_TOPIC, DIAGNOSTICS_TOPIC, PROFILE_TOPIC, PROGRESS_TOPIC, SUMMARY_TOPIC, stamp_ns,
+    CONTROLLER_TOPIC, DIAGNOSTICS_TOPIC, PROFILE_TOPIC, PROGRESS_TOPIC, STANCE_KINETICS_TOPIC, SUMMARY_TOPIC, stamp_ns,
 )
 from hop_impedance.nodes.qos import latched_qos, result_qos
 from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC
@@ -271,6 +271,8 @@ def _yaml(v) -> str:
         return "[" + ",".join(f"'{x}'" for x in v) + "]"
     if isinstance(v, float):
         return repr(v)
+    if isinstance(v, str) and not v:
+        return "''"  # rcl cannot parse an empty override (``-p name:=``)
     return str(v)
 
 
@@ -300,6 +302,44 @@ def stop_children(children: dict[str, subprocess.Popen], grace_s: float = 5.0) -
             p.wait()
 
 
+def ready_subscriptions(cfg: PipelineConfig) -> dict[str, int]:
+    """Subscriptions every downstream node must have before the replay starts (topic -> count).
+
+    Results are reliable but volatile: a node still importing scipy when a
+    stance is published would never get it (measured under load: 9 of 10
+    stances missed by a late impedance_estimator). Counts include this
+    process's :class:`ResultCollector`.
+    """
+    out = {FORCE_TOPIC: 2, MARKER_TOPIC: 1, STANCE_KINETICS_TOPIC: 1,
+           SUMMARY_TOPIC: 2 + cfg.with_rerun, PROFILE_TOPIC: 2 + cfg.with_rerun}
+    if cfg.with_rerun:
+        out[FORCE_TOPIC] += 1
+    return out
+
+
+def _wait_for_graph(executor, node: Node, expected: dict[str, int], deadline: float, alive=lambda: None) -> None:
+    """Spin until ``node`` sees at least ``expected[topic]`` subscriptions on each topic (or raise at ``deadline``)."""
+    while True:
+        missing = {t: n for t, n in expected.items() if node.count_subscribers(t) < n}
+        if not missing:
+            return
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"nodes not up in time; subscriptions missing on {sorted(missing)}")
+        alive()
+        executor.spin_once(timeout_sec=0.05)
+
+
+def _watch(children: dict[str, subprocess.Popen], log_dir: Path):
+    """A check that raises when a child exited with an error (the replay exits 0 when done)."""
+
+    def alive() -> None:
+        for name, p in children.items():
+            if p.poll() not in (None, 0):
+                raise RuntimeError(f"node {name} exited with code {p.returncode}; see {log_dir / (name + '.log')}")
+
+    return alive
+
+
 def _run_processes(cfg: PipelineConfig) -> PipelineReport:
     import rclpy
 
@@ -313,13 +353,11 @@ def _run_processes(cfg: PipelineConfig) -> PipelineReport:
         collector = ResultCollector(context=context)
         executor = _executor_for(context)
         executor.add_node(collector)
-        names = NODE_MODULES[:-1] + ("rerun_bridge",) + NODE_MODULES[-1:] if cfg.with_rerun else NODE_MODULES
+        names = NODE_MODULES[:-1] + ("rerun_bridge",) if cfg.with_rerun else NODE_MODULES[:-1]
         children = start_children(names, cfg, log_dir)
-
-        def alive() -> None:
-            for name, p in children.items():
-                if p.poll() not in (None, 0):
-                    raise RuntimeError(f"node {name} exited with code {p.returncode}; see {log_dir / (name + '.log')}")
+        alive = _watch(children, log_dir)
+        _wait_for_graph(executor, collector, ready_subscriptions(cfg), t0 + cfg.timeout_s, alive)
+        children |= start_children(("replay",), cfg, log_dir)
 
         _spin_until_done(executor, collector, cfg, t0, alive)
         report = collector.report
