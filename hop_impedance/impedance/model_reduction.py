@@ -160,6 +160,50 @@ def _ols_t_squared(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return beta_s / norms, f, sse
 
 
+class _OlsDowndate:
+    """OLS of a design and of the designs left after removing columns one at a time.
+
+    One QR of the column-scaled design gives the scaled coefficients beta,
+    H = (X^T X)^-1 = R^-1 R^-T and the SSE. Removing column j uses the exact
+    partitioned-inverse identities (Frisch-Waugh-Lovell)::
+
+        beta' = beta_{-j} - H_{-j,j} beta_j / H_jj
+        H'    = H_{-j,-j} - H_{-j,j} H_{j,-j} / H_jj
+        SSE'  = SSE + beta_j**2 / H_jj
+
+    so each elimination step costs a few 9x9 operations instead of a new QR
+    (the same numbers as refitting, up to rounding of order
+    machine epsilon x condition number squared).
+    """
+
+    def __init__(self, X: np.ndarray, y: np.ndarray) -> None:
+        norms = np.linalg.norm(X, axis=0)
+        Q, R = np.linalg.qr(X / norms)
+        R_inv = np.linalg.inv(R)
+        self.beta = R_inv @ (Q.T @ y)
+        resid = y - (X / norms) @ self.beta
+        self.sse = float(resid @ resid)
+        self.H = R_inv @ R_inv.T
+        self.n = X.shape[0]
+
+    def t_squared(self) -> np.ndarray:
+        """Partial F (= t^2) of every current column, shape (p,)."""
+        p = self.beta.size
+        sigma2 = self.sse / max(self.n - p, 1)
+        var = sigma2 * np.diag(self.H)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(var > 0, self.beta**2 / var, np.inf)
+
+    def remove(self, j: int) -> None:
+        """Drop current column j (0 = intercept column)."""
+        h = self.H[:, j]
+        hjj = h[j]
+        self.sse += float(self.beta[j] ** 2 / hjj)
+        keep = np.arange(self.beta.size) != j
+        self.beta = (self.beta - h * (self.beta[j] / hjj))[keep]
+        self.H = (self.H - np.outer(h, h / hjj))[keep][:, keep]
+
+
 def _is_singular(X: np.ndarray) -> bool:
     norms = np.linalg.norm(X, axis=0)
     if np.any(norms == 0.0):
@@ -254,12 +298,14 @@ def reduce_model(
         beta, _, _ = _ols_t_squared(build(active), y)
         n_eff = effective_sample_count(y - build(active) @ beta, minimum=len(active) + 3.0)
 
+    if sse_function is None:
+        ols = _OlsDowndate(build(active), y) if active else None
+
     def partial_tests(names: list[str]) -> dict[str, tuple[float, float]]:
-        X = build(names)
-        p = X.shape[1]
+        p = len(names) + 1
         dof = n_eff - p
         if sse_function is None:
-            _, f_all, _ = _ols_t_squared(X, y)
+            f_all = ols.t_squared()
             f = {name: float(f_all[i + 1]) for i, name in enumerate(names)}
         else:
             sse_full = sse_function(tuple(names))
@@ -279,7 +325,7 @@ def reduce_model(
     def vifs(names: list[str]) -> dict[str, float]:
         idx = [position[name] for name in names]
         try:
-            return dict(zip(names, np.diag(np.linalg.inv(correlation[np.ix_(idx, idx)]))))
+            return dict(zip(names, np.diag(np.linalg.inv(correlation[idx][:, idx]))))
         except np.linalg.LinAlgError:
             return {name: float("inf") for name in names}
 
@@ -301,6 +347,8 @@ def reduce_model(
             worst = min(candidates, key=lambda t: tests[t][0])
             reason = "not significant"
         steps.append(EliminationStep(worst, reason, tests[worst][1], tests[worst][0], float(vif[worst])))
+        if sse_function is None:
+            ols.remove(active.index(worst) + 1)
         active.remove(worst)
         tests = partial_tests(active) if active else {}
 
