@@ -18,6 +18,7 @@ Counting
   are counted apart: they are not runs of the workflow.
 
 Usage: .venv/bin/python bench/discovery_hit_rates.py [--seeds N] [--null-seeds N] [--hops N] [--cases a,b,...]
+       [--sizes rate_fraction=0.25,...] [--freqs 2.2]
 Prints one line per run and the table (markdown) at the end.
 """
 
@@ -58,13 +59,13 @@ CASES = {
 }
 
 
-def generate(name: str, seed: int, hops: int):
+def generate(name: str, seed: int, hops: int, sizes: EffectSizes = EffectSizes(), freqs: tuple | None = None):
     """(recording, frequency) of one case and seed; raises ValueError when generation fails."""
     law, surfaces, sensors, _ = CASES[name]
-    freqs = CASE_FREQS.get(name, FREQS)
+    freqs = freqs or CASE_FREQS.get(name, FREQS)
     freq = freqs[seed % len(freqs)]
     rec, _ = simulate_stance_set_recording(freq, surfaces, hops, seed=seed, effects=Effects(**{**BASE, **law}),
-                                           sensors=SensorConfig(**sensors), rtol=1e-6, sizes=EffectSizes(),
+                                           sensors=SensorConfig(**sensors), rtol=1e-6, sizes=sizes,
                                            redraws=10)
     return rec, freq
 
@@ -84,14 +85,18 @@ def main() -> None:
     ap.add_argument("--null-seeds", type=int, default=20)
     ap.add_argument("--hops", type=int, default=8)
     ap.add_argument("--cases", default=",".join(CASES))
+    ap.add_argument("--sizes", default="", help="EffectSizes overrides, e.g. rate_fraction=0.25,push_fraction=0.2")
+    ap.add_argument("--freqs", default="", help="hop frequencies to cycle over (Hz), e.g. 2.2 (default: per case)")
     args = ap.parse_args()
+    sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})
+    freqs = tuple(float(f) for f in args.freqs.split(",") if f) or None
     rows = []
     for name in args.cases.split(","):
         expected = CASES[name][3]
         tally = {"exact": 0, "named": 0, "named_or_ambiguous": 0, "extra": 0, "runs": 0, "gen_fail": 0}
         for seed in range(args.null_seeds if name == "null" else args.seeds):
             try:
-                rec, freq = generate(name, seed, args.hops)
+                rec, freq = generate(name, seed, args.hops, sizes, freqs)
             except ValueError as exc:
                 tally["gen_fail"] += 1
                 print(f"{name} seed {seed}: generation failed: {exc}", flush=True)

@@ -27,6 +27,7 @@ from hop_impedance.discovery.identify import identify, surface_law
 from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial
 from hop_impedance.discovery.model import FittedLaw, ModelSpec
 from hop_impedance.simulation.ground import GroundLaw
+from hop_impedance.simulation.impedance_laws import ImpedanceLaw
 from hop_impedance.simulation.stance import simulate_stance
 from hop_impedance.simulation.stance_set import RIGID_NO_BOUNCE
 
@@ -44,15 +45,25 @@ def ground_of(spec: ModelSpec, s: MeasuredStance) -> GroundLaw:
 
 def simulate_measured_stance(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: MeasuredStance) -> dict:
     """Forward simulation of one measured stance; residual arrays per signal of :data:`GAP_SIGNALS`."""
-    law = FittedLaw(spec, np.asarray(coefs, float))
+    return simulate_with_law(FittedLaw(spec, np.asarray(coefs, float)), ground_of(spec, s), spec.offset_n, trial, s)
+
+
+def simulate_with_law(law: ImpedanceLaw, ground: GroundLaw, offset_n: float, trial: MeasuredTrial,
+                      s: MeasuredStance) -> dict:
+    """Forward simulation of stance ``s`` from its measured touchdown state with any joint law and ground.
+
+    ``offset_n`` (N) is added to the simulated Fz before comparing with the raw
+    plate force. Returns ``end_reason``, ``duration_error_s``, ``n`` and the
+    residual arrays (measured minus simulated) per signal of :data:`GAP_SIGNALS`.
+    """
     t_max = 2.0 * float(s.t_s[-1]) + 0.1
     try:
-        sim = simulate_stance(trial.chain, law, ground_of(spec, s), s.touchdown, t_max_s=t_max, rtol=1e-6, atol=1e-8,
+        sim = simulate_stance(trial.chain, law, ground, s.touchdown, t_max_s=t_max, rtol=1e-6, atol=1e-8,
                               sample_times_s=s.t_s)
         end, n = sim.end_reason, len(sim.t_s)
     except RuntimeError as exc:  # integration failure: report, compare nothing
         return {"end_reason": f"failed: {exc}", "duration_error_s": float("nan"), "residuals": {}, "n": 0}
-    res = {"grf": s.fz_raw_n[:n] - (sim.grf_n[:, 1] + spec.offset_n)}
+    res = {"grf": s.fz_raw_n[:n] - (sim.grf_n[:, 1] + offset_n)}
     for j, name in enumerate(JOINT_NAMES):
         res[f"angle_{name}"] = s.rho_rad[:n, j] - sim.rho_rad[:, j]
         res[f"moment_{name}"] = s.moment_nm[:n, j] - sim.moments_nm[:, j]
@@ -109,3 +120,14 @@ def held_out_forward_gap(spec: ModelSpec, trial: MeasuredTrial) -> tuple[dict, l
         per_stance += [(s, simulate_measured_stance(fitted, coefs, trial, s)) for s in test]
     per_stance.sort(key=lambda x: x[0].index)
     return gap_figures(per_stance), per_stance
+
+
+def law_forward_gap(trial: MeasuredTrial, law: ImpedanceLaw, ground: GroundLaw, offset_n: float = 0.0) -> dict:
+    """:func:`gap_figures` of one given law (e.g. the simulation truth) on every stance, nothing identified.
+
+    With the law that generated a simulated recording this is the recording's
+    *noise floor*: what is left when the model is exactly right, i.e. the
+    effect of sensor noise, low-pass/ID processing and the touchdown state
+    estimated from filtered markers.
+    """
+    return gap_figures([(s, simulate_with_law(law, ground, offset_n, trial, s)) for s in trial.stances])
