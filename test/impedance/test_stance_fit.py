@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 
 import numpy as np
@@ -29,8 +30,13 @@ def test_noise_free_recovery_within_2_percent(joint, freq):
     assert fit.r_squared > 0.9999
 
 
+@functools.lru_cache(maxsize=None)
 def noisy_reduced_law_errors(joint, freq, n_stances=40):
-    """Relative errors (k0, k1) of the reduced-law fit over n_stances noisy stances."""
+    """Relative errors (k0, k1) of the reduced-law fit over n_stances noisy stances.
+
+    Cached for the session: the recording test and the ankle per-stance test
+    use the same stances (seeds 100-139); callers must not modify the array.
+    """
     solver = ConstrainedLeastSquares()
     errors = []
     for seed in range(n_stances):
