@@ -108,7 +108,11 @@ class InputTracker:
     newest_ns: int | None = None
     first_wall: float | None = None
     last_wall: float | None = None
+    #: ``(stamp before the gap, stamp after it, samples lost)`` per gap, oldest first (ns).
+    gaps: list[tuple[int, int, int]] = field(default_factory=list)
     _steps: list[int] = field(default_factory=list, repr=False)
+    _period: float = field(default=0.0, repr=False)
+    _taken: int = field(default=0, repr=False)
 
     def note(self, ns: int) -> bool:
         """Record a stamp (ns); returns False when it is late (older than the newest)."""
@@ -121,13 +125,23 @@ class InputTracker:
             return False
         if self.newest_ns is not None:
             step = ns - self.newest_ns
-            if len(self._steps) < 50:
+            if len(self._steps) < 50:  # the median is frozen after 50 steps (per-message cost)
                 self._steps.append(step)
-            period = float(np.median(self._steps))
-            if step > 1.5 * period:
-                self.lost += int(round(step / period)) - 1
+                self._period = float(np.median(self._steps))
+            if step > 1.5 * self._period:
+                n = int(round(step / self._period)) - 1
+                self.lost += n
+                self.gaps.append((self.newest_ns, ns, n))
         self.newest_ns = ns
         return True
+
+    def take_lost_before(self, end_ns: int) -> int:
+        """Samples lost in the gaps not taken yet that start before ``end_ns`` (ns); each gap is taken once."""
+        n = 0
+        while self._taken < len(self.gaps) and self.gaps[self._taken][0] < end_ns:
+            n += self.gaps[self._taken][2]
+            self._taken += 1
+        return n
 
     @property
     def rate_hz(self) -> float:

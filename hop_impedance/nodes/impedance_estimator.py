@@ -155,6 +155,8 @@ def summary_message(stance: StanceKinetics, fits: dict[str, JointImpedanceFit]) 
     for name in ("contact_time_s", "peak_grf_n", "peak_grf_bw", "hop_frequency_hz", "leg_stiffness_n_per_m", "hip_excursion_m"):
         setattr(msg, name, getattr(stance, name))
     msg.flight_time_before_s = stance.flight_time_before_s
+    msg.force_samples_lost_before = stance.force_samples_lost_before
+    msg.force_samples_lost_in_stance = stance.force_samples_lost_in_stance
     ordered = [fits[n] for n in JOINT_NAMES]
     msg.k0 = [_c(f, "k0") for f in ordered]
     msg.k1 = [_c(f, "k1") for f in ordered]

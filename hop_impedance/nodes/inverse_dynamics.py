@@ -15,6 +15,13 @@ Thin adapter around :class:`hop_impedance.biomech.stages.StanceAnalysisStage`:
   force stamp minus the newest marker stamp.
 - A stance with missing samples is published with a rejection reason
   (stages.missing_samples_reason), never analysed on incomplete data.
+  Every force-stamp gap (in the stamp-sorted stream) is counted exactly
+  once: on the next stance's ``force_samples_lost_before`` when it starts
+  before that stance's touchdown (in a flight, or a whole stance that was
+  never detected), on its ``force_samples_lost_in_stance`` when it starts
+  inside it (the stance is then also rejected), or in
+  ``force_lost_after_last_stance`` on /diagnostics at the end of a replayed
+  stream; their sum is ``force_lost_sorted``.
 - Output per stance: ``StanceKinetics`` on ``/stance/kinetics`` (whole
   stance, reliable) and, if ``publish_frames``, one ``JointKinetics`` per
   force frame of the stance on ``/joint_kinetics`` (published after the
@@ -77,6 +84,10 @@ class InverseDynamicsNode(Node):
         self.trackers = {FORCE_TOPIC: InputTracker(FORCE_TOPIC), MARKER_TOPIC: InputTracker(MARKER_TOPIC)}
         self.stances_out = 0
         self.rejected = 0
+        # losses outside reported stances (a stance whose samples all vanished is never detected)
+        self.sorted_force = InputTracker(FORCE_TOPIC)  # the released (stamp-sorted) force stream
+        self.lost_between_stances = 0
+        self.lost_after_last = 0
         self.analysis_s: list[float] = []
         self.pub_stance = self.create_publisher(StanceKinetics, STANCE_KINETICS_TOPIC, result_qos())
         self.pub_frames = self.create_publisher(JointKinetics, JOINT_KINETICS_TOPIC, result_qos(2000))
@@ -134,6 +145,12 @@ class InverseDynamicsNode(Node):
         if self.stage is not None:
             for res in self.stage.flush():
                 self._publish(res)
+        self.lost_after_last = self.sorted_force.take_lost_before(2**63 - 1)
+        if self.sorted_force.lost:
+            self.get_logger().warning(
+                f"{self.sorted_force.lost} force samples lost: {self.lost_between_stances} before reported stances, "
+                f"{self.lost_after_last} after the last one; stances with losses inside were rejected")
+        self.diagnostics.publish()  # the final counts, at once
         self.progress.finished = True
         self.progress.stances_out = self.stances_out
         self.progress.publish()
@@ -148,6 +165,8 @@ class InverseDynamicsNode(Node):
         """Release reordered samples, calibrate once, push to the stage, publish finished stances."""
         forces = self.force_buf.release(everything)
         markers = self.marker_buf.release(everything)
+        for ns, _ in forces:
+            self.sorted_force.note(ns)
         if self._arrivals_new:
             self.arrivals = np.concatenate([self.arrivals[-5000:], np.array(self._arrivals_new, np.int64)])
             self._arrivals_new = []
@@ -232,6 +251,9 @@ class InverseDynamicsNode(Node):
     def _publish(self, res: StanceResult) -> None:
         msg = stance_message(res, self.t0_ns)
         msg.takeoff_received_ns = self._takeoff_arrival_ns(stamp_ns(msg.takeoff_stamp))
+        msg.force_samples_lost_before = self.sorted_force.take_lost_before(stamp_ns(msg.touchdown_stamp))
+        msg.force_samples_lost_in_stance = self.sorted_force.take_lost_before(stamp_ns(msg.takeoff_stamp))
+        self.lost_between_stances += msg.force_samples_lost_before
         self.pub_stance.publish(msg)
         self.stances_out += 1
         self.rejected += res.rejection_reason is not None
@@ -249,6 +271,9 @@ class InverseDynamicsNode(Node):
         out["markers_late_dropped"] = self.marker_buf.dropped
         f, m = (self.trackers[k].newest_ns for k in (FORCE_TOPIC, MARKER_TOPIC))
         out["sync_residual_s"] = (f - m) * 1e-9 if f is not None and m is not None else math.nan
+        out["force_lost_between_stances"] = self.lost_between_stances
+        out["force_lost_after_last_stance"] = self.lost_after_last
+        out["force_lost_sorted"] = self.sorted_force.lost
         out["stances_published"] = self.stances_out
         out["stances_rejected"] = self.rejected
         out["analysis_p50_ms"] = _pct(self.analysis_s, 50)

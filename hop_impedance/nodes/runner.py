@@ -385,6 +385,8 @@ def stance_table(report: PipelineReport) -> list[str]:
         for j in range(3):
             cells.append(f"{_n(s.k0[j], 8, 1)} {_n(s.k1[j], 7, 0)} {_n(s.r_squared[j], 5, 3)}")
         status = "accepted" if not s.rejection_reason else s.rejection_reason
+        if s.force_samples_lost_before:
+            status += f" [{s.force_samples_lost_before} force samples lost since the previous stance]"
         td = (stamp_ns(s.touchdown_stamp) - t_first) * 1e-9
         lines.append(f"{s.stance_index:>3} {td:>7.3f} {s.contact_time_s:>6.3f} | " + " | ".join(cells) + f" | {status}")
     lines.append("k0 in N m/rad, k1 in N m/rad^2 (both legs lumped; 0 = term removed by the model reduction)")
@@ -405,4 +407,8 @@ def loss_lines(report: PipelineReport, file_counts: dict[str, int]) -> list[str]
             got = report.received(node, topic)
             sent = file_counts.get(topic, 0)
             out.append(f"{node} {topic}: {got} of {sent} received, {max(sent - got, 0)} lost")
+    between = report.diag("/inverse_dynamics", "force_lost_between_stances", "0")
+    if between not in ("0", ""):
+        out.append(f"/inverse_dynamics: {between} force samples lost outside reported stances "
+                   "(flights, or whole stances never detected; stances with losses inside are rejected)")
     return out

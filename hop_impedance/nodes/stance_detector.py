@@ -108,6 +108,7 @@ class StanceDetectorNode(Node):
         self.process(everything=True)
         for ev in self.stage.flush():
             self._publish(ev)
+        self.diagnostics.publish()  # the final counts, at once
         self.progress.finished = True
         self.progress.publish()
 
