@@ -109,12 +109,20 @@ def variance_inflation_factors(design: np.ndarray) -> np.ndarray:
         correlation matrix; inf when the correlation matrix is singular.
     """
     Z, ok = _standardise(design)
-    vif = np.full(design.shape[1], np.inf)
     if not ok.any():
-        return vif
+        return np.full(design.shape[1], np.inf)
     R = Z[:, ok].T @ Z[:, ok]
-    eig = np.linalg.eigvalsh(R)
-    if eig[0] <= 1e-13 * max(eig[-1], 1.0):
+    return _vifs_from_correlation(R, np.linalg.eigvalsh(R), ok)
+
+
+def _vifs_from_correlation(R: np.ndarray, eig: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """VIFs (diagonal of R^-1) of the ``ok`` columns, inf elsewhere or when R is singular.
+
+    ``R`` is the correlation matrix of the ``ok`` columns and ``eig`` its
+    ascending eigenvalues (shared with the other diagnostics).
+    """
+    vif = np.full(ok.size, np.inf)
+    if eig.size == 0 or eig[0] <= 1e-13 * max(eig[-1], 1.0):
         return vif
     vif[ok] = np.diag(np.linalg.inv(R))
     return vif
@@ -159,11 +167,16 @@ def collinearity_diagnostics(
     sign, logdet = np.linalg.slogdet(H)
     Z, ok = _standardise(X)
     R = Z.T @ Z
+    # one eigen-decomposition of the well-defined block serves the
+    # determinant, the eigenvalue ratio and the VIFs
+    R_ok = R[ok][:, ok]
+    eig = np.linalg.eigvalsh(R_ok) if ok.any() else np.zeros(0)
+    vif = _vifs_from_correlation(R_ok, eig, ok)
     R[~ok, :] = np.nan
     R[:, ~ok] = np.nan
     if ok.all() and X.shape[1] > 0:
-        corr_det = float(np.linalg.det(R))
-        corr_ratio = _eigenvalue_ratio(R)
+        corr_det = float(np.prod(eig))
+        corr_ratio = float(eig[-1] / eig[0]) if eig[0] > 0.0 else float("inf")
     else:
         corr_det, corr_ratio = 0.0, float("inf")
     return CollinearityDiagnostics(
@@ -173,5 +186,5 @@ def collinearity_diagnostics(
         correlation_matrix=R,
         correlation_determinant=corr_det,
         correlation_eigenvalue_ratio=corr_ratio,
-        variance_inflation_factors=variance_inflation_factors(X),
+        variance_inflation_factors=vif,
     )
