@@ -322,12 +322,26 @@ def reduce_model(
     correlation = Z.T @ Z
     position = {name: i for i, name in enumerate(terms)}
 
+    # Inverse correlation matrix of the active terms: one inverse, then the
+    # same partitioned-inverse downdate as the OLS path per removed term.
+    inverse: dict[str, np.ndarray | None] = {"matrix": None}
+
     def vifs(names: list[str]) -> dict[str, float]:
-        idx = [position[name] for name in names]
-        try:
-            return dict(zip(names, np.diag(np.linalg.inv(correlation[idx][:, idx]))))
-        except np.linalg.LinAlgError:
-            return {name: float("inf") for name in names}
+        if inverse["matrix"] is None:
+            idx = [position[name] for name in names]
+            try:
+                inverse["matrix"] = np.linalg.inv(correlation[idx][:, idx])
+            except np.linalg.LinAlgError:
+                return {name: float("inf") for name in names}
+        return dict(zip(names, np.diag(inverse["matrix"])))
+
+    def remove_from_inverse(j: int) -> None:
+        H = inverse["matrix"]
+        if H is None:
+            return
+        h = H[:, j]
+        keep = np.arange(h.size) != j
+        inverse["matrix"] = (H - np.outer(h, h / h[j]))[keep][:, keep]
 
     tests = partial_tests(active) if active else {}
     while active:
@@ -349,6 +363,7 @@ def reduce_model(
         steps.append(EliminationStep(worst, reason, tests[worst][1], tests[worst][0], float(vif[worst])))
         if sse_function is None:
             ols.remove(active.index(worst) + 1)
+        remove_from_inverse(active.index(worst))
         active.remove(worst)
         tests = partial_tests(active) if active else {}
 
