@@ -81,6 +81,29 @@ def header_stamp_ns(cdr: bytes) -> int:
     return sec * 1_000_000_000 + nsec
 
 
+_WRENCH_LE, _WRENCH_BE = struct.Struct("<6d"), struct.Struct(">6d")
+
+
+def wrench_from_cdr(cdr: bytes) -> tuple[int, tuple[float, float, float, float, float, float]]:
+    """``geometry_msgs/WrenchStamped`` CDR bytes -> (stamp ns, (Fx, Fy, Fz, Mx, My, Mz)).
+
+    The 1 kHz force topic is subscribed raw and parsed here: rclpy's
+    ``deserialize_message`` builds five Python message objects per sample
+    (~65 us measured on this machine, bench/bench_pipeline.py), this takes ~2 us.
+    Layout (XCDR1, plain): 4-byte encapsulation (``00 01`` little endian),
+    header stamp int32 sec + uint32 nanosec, frame_id as uint32 length
+    (including the NUL) + bytes, padding to 8 bytes counted from the end of
+    the encapsulation, then six float64: force x, y, z (N), torque x, y, z (N m),
+    in the message's frame (contract: force plate frame).
+    """
+    little = cdr[1] == 1
+    sec, nsec, n = struct.unpack_from("<iII" if little else ">iII", cdr, 4)
+    pos = 16 + n
+    pos += -(pos - 4) % 8
+    values = (_WRENCH_LE if little else _WRENCH_BE).unpack_from(cdr, pos)
+    return sec * 1_000_000_000 + nsec, values
+
+
 def set_stamp(stamp, ns: int) -> None:
     """Write integer ns into a ``builtin_interfaces/Time`` (sec, nanosec)."""
     stamp.sec, stamp.nanosec = divmod(int(ns), 1_000_000_000)

@@ -46,7 +46,7 @@ from hop_impedance.biomech.kinematics import body_model_from_markers
 from hop_impedance.biomech.stages import StanceAnalysisStage
 from hop_impedance.nodes.common import (
     END_TOPIC, JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC, Diagnostics, InputTracker, ProgressReporter,
-    ReorderBuffer, declare, seconds_to_ns, set_stamp, stamp_ns,
+    ReorderBuffer, declare, seconds_to_ns, set_stamp, stamp_ns, wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
 from hop_impedance.recording import FORCE_TOPIC, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, MarkerSeries, Subject
@@ -92,7 +92,7 @@ class InverseDynamicsNode(Node):
         self.pub_stance = self.create_publisher(StanceKinetics, STANCE_KINETICS_TOPIC, result_qos())
         self.pub_frames = self.create_publisher(JointKinetics, JOINT_KINETICS_TOPIC, result_qos(2000))
         self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
-        self.create_subscription(WrenchStamped, FORCE_TOPIC, self._on_wrench, input_qos(reliable))
+        self.create_subscription(WrenchStamped, FORCE_TOPIC, self._on_wrench, input_qos(reliable), raw=True)
         self.create_subscription(MarkerArray, MARKER_TOPIC, self._on_markers, input_qos(reliable))
         self.create_subscription(Header, END_TOPIC, self._on_end, latched_qos())
         self.progress = ProgressReporter(self, self.trackers)
@@ -106,11 +106,11 @@ class InverseDynamicsNode(Node):
     def _on_subject(self, msg: SubjectInfo) -> None:
         self.subject = Subject(msg.subject_id, float(msg.body_mass), float(msg.body_height), self.sex)
 
-    def _on_wrench(self, msg: WrenchStamped) -> None:
-        ns = stamp_ns(msg.header.stamp)
+    def _on_wrench(self, cdr: bytes) -> None:
+        """Raw ``WrenchStamped`` (parsed by :func:`common.wrench_from_cdr`, ~30x cheaper than deserialising)."""
+        ns, (fx, _, fz, _, my, _) = wrench_from_cdr(cdr)
         self.trackers[FORCE_TOPIC].note(ns)
-        f, m = msg.wrench.force, msg.wrench.torque
-        if self.force_buf.add(ns, (f.x, f.z, -m.y)):  # sagittal [Fx, Fz, Mo] (force_plate.sagittal_wrench)
+        if self.force_buf.add(ns, (fx, fz, -my)):  # sagittal [Fx, Fz, Mo] (force_plate.sagittal_wrench)
             self._arrivals_new.append((ns, time.time_ns()))
 
     def _on_markers(self, msg: MarkerArray) -> None:

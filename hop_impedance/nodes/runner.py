@@ -65,6 +65,8 @@ class PipelineConfig:
         Give up (and report) after this long.
     params_file : str or None
         ROS 2 YAML parameter file for the nodes (``config/pipeline.yaml``).
+    overrides : dict
+        ``{node: {parameter: value}}`` on top of everything else (benchmarks, tests).
     """
 
     recording: str
@@ -79,6 +81,7 @@ class PipelineConfig:
     timeout_s: float = 120.0
     params_file: str | None = None
     loop: bool = False
+    overrides: dict = field(default_factory=dict)
 
     @property
     def with_rerun(self) -> bool:
@@ -147,8 +150,8 @@ class ResultCollector(Node):
 
 
 def node_parameters(cfg: PipelineConfig) -> dict[str, dict]:
-    """Parameters of each node for ``cfg`` (on top of ``cfg.params_file``)."""
-    return {
+    """Parameters of each node for ``cfg`` (on top of ``cfg.params_file``; ``cfg.overrides`` last)."""
+    params = {
         "replay": {"recording": str(cfg.recording), "rate": float(cfg.rate), "loop": bool(cfg.loop),
                    "consumers": CONSUMERS, "wait_for_subscribers_s": 10.0},
         "stance_detector": {},
@@ -158,6 +161,9 @@ def node_parameters(cfg: PipelineConfig) -> dict[str, dict]:
         "rerun_bridge": {"save_path": str(cfg.rerun_save or ""), "viewer_url": str(cfg.rerun_url or ""),
                          "spawn": not (cfg.rerun_save or cfg.rerun_url)},
     }
+    for node, values in cfg.overrides.items():
+        params[node] = {**params[node], **values}
+    return params
 
 
 def run_pipeline(cfg: PipelineConfig) -> PipelineReport:

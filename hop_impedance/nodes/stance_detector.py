@@ -26,7 +26,7 @@ from hop_impedance.biomech.stages import StanceDetectorStage, pending_stance
 from hop_impedance.biomech.stance_detection import DetectorOptions
 from hop_impedance.nodes.common import (
     END_TOPIC, EVENTS_TOPIC, Diagnostics, InputTracker, ProgressReporter, ReorderBuffer, declare, seconds_to_ns,
-    set_stamp, stamp_ns,
+    set_stamp, stamp_ns, wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
 from hop_impedance.recording import FORCE_TOPIC
@@ -56,7 +56,7 @@ class StanceDetectorNode(Node):
         self._recent_t = np.zeros(0)
         self._recent_fz = np.zeros(0)
         self.pub = self.create_publisher(StanceEvent, EVENTS_TOPIC, result_qos())
-        self.create_subscription(WrenchStamped, FORCE_TOPIC, self._on_wrench, input_qos(reliable))
+        self.create_subscription(WrenchStamped, FORCE_TOPIC, self._on_wrench, input_qos(reliable), raw=True)
         self.create_subscription(Header, END_TOPIC, self._on_end, latched_qos())
         self.progress = ProgressReporter(self, {FORCE_TOPIC: self.tracker})
         self.diagnostics = Diagnostics(self, diag, self._diag_values)
@@ -64,10 +64,11 @@ class StanceDetectorNode(Node):
         self._end: tuple[int, float] | None = None
         self.create_timer(period, self._tick)
 
-    def _on_wrench(self, msg: WrenchStamped) -> None:
-        ns = stamp_ns(msg.header.stamp)
+    def _on_wrench(self, cdr: bytes) -> None:
+        """Raw ``WrenchStamped`` (parsed by :func:`common.wrench_from_cdr`)."""
+        ns, (_, _, fz, _, _, _) = wrench_from_cdr(cdr)
         self.tracker.note(ns)
-        self.buffer.add(ns, msg.wrench.force.z)
+        self.buffer.add(ns, fz)
 
     def _tick(self) -> None:
         self.process()
