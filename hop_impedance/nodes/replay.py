@@ -98,6 +98,7 @@ class ReplayNode(Node):
         self.consumer_timeout_s = float(self.get_parameter("consumer_timeout_s").value)
         self.progress: dict[str, tuple[int, float]] = {}  # node -> (consumed stamp ns, wall time of report)
         self.wait_s = 0.0
+        self.play_s = 0.0  # wall time from the first message played to end-of-stream (throughput without start-up)
         self.last_stamp_ns = 0
         self._first_stamp_ns: int | None = None
         self._progress_event = threading.Event()
@@ -153,6 +154,7 @@ class ReplayNode(Node):
             self._wait_for_subscribers()
             loop = bool(self.get_parameter("loop").value)
             shift = 0
+            t_play = time.monotonic()
             while not self._stop.is_set():
                 span = self._play_once(shift)
                 if not loop or span <= 0:
@@ -160,6 +162,7 @@ class ReplayNode(Node):
                 shift += span
             self._drain()
             self._publish_end()
+            self.play_s = time.monotonic() - t_play
         except (RecordingError, ValueError) as exc:
             self.error = str(exc)
             self.get_logger().error(self.error)

@@ -106,6 +106,8 @@ class PipelineReport:
     finished: bool = False
     output_mcap: str = ""
     rrd: str = ""
+    #: In-process runs: wall time from the replay's first message to its end-of-stream (s).
+    replay_play_s: float = float("nan")
 
     def received(self, node: str, topic: str) -> int:
         """Messages of ``topic`` the node ``node`` reported received (0 if unknown)."""
@@ -233,6 +235,7 @@ def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
         _wait_for_bridge(executor, nodes, len(collector.report.summaries))
         replay = nodes[-1]
         replay.stop()
+        collector.report.replay_play_s = replay.play_s or float("nan")
         if replay.error:
             raise ValueError(replay.error)
         report = collector.report

@@ -111,7 +111,9 @@ def test_killed_node_resumes_with_next_complete_stance(tmp_path, victim):
         assert _spin_until(executor, lambda: len(after()) >= 5, 60, alive), "too few stances after the restart"
         targets = after()[:4]  # the fifth touchdown ends the fourth stance's window (batch mode)
         assert _spin_until(executor, lambda: all(_match([s for s, _ in col.summaries], td) for td in targets), 30, alive), \
-            f"no result for stances after the restart ({victim} log: {(tmp_path / (victim + '.log')).read_text()[-1500:]})"
+            (f"no result for stances after the restart: targets {targets}, summaries "
+             f"{[(stamp_ns(s.touchdown_stamp), s.rejection_reason) for s, _ in col.summaries]} "
+             f"({victim} log: {(tmp_path / (victim + '.log')).read_text()[-1500:]})")
         _spin_until(executor, lambda: False, 0.5, alive)  # the profiles published with the last summary
     finally:
         stop_children(children)
