@@ -6,7 +6,9 @@ children started like ``hop-impedance pipeline --processes``; this process colle
 ``/stance/events``, ``/impedance/profile`` and ``/impedance/stance_summary``.
 
 What is asserted, with ``t_up`` the wall time at which the restarted node's reader (a new
-endpoint GID; the killed one lingers until its DDS lease expires) is visible in the graph and a 0.5 s margin for its readers to match the publishers:
+endpoint GID; the killed one lingers until its DDS lease expires) is visible in the graph and,
+for inverse_dynamics, its first progress report with input data received (the replay matches
+new readers only after DDS discovery, measured up to several seconds under load) and a 0.5 s margin for its readers to match the publishers:
 
 - every stance whose touchdown event arrives after ``t_up + 0.5 s`` gets exactly one summary
   (accepted, or with a rejection reason) and three profiles, matched by touchdown stamp;
@@ -30,7 +32,8 @@ from hop_impedance.nodes.qos import result_qos  # noqa: E402
 from hop_impedance.nodes.runner import PipelineConfig, start_children, stop_children  # noqa: E402
 from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC  # noqa: E402
 from hop_impedance.nodes.common import STANCE_KINETICS_TOPIC  # noqa: E402
-from hop_impedance_msgs.msg import ImpedanceProfile, StanceEvent, StanceSummary  # noqa: E402
+from hop_impedance.nodes.common import PROGRESS_TOPIC  # noqa: E402
+from hop_impedance_msgs.msg import ImpedanceProfile, Progress, StanceEvent, StanceSummary  # noqa: E402
 
 REC = "recordings/sim_2p20hz_hard.mcap"
 MARGIN_S = 0.5
@@ -47,6 +50,8 @@ class Collector:
         node.create_subscription(StanceEvent, EVENTS_TOPIC, self._on_event, result_qos(1000))
         node.create_subscription(StanceSummary, SUMMARY_TOPIC, lambda m: self.summaries.append((m, time.monotonic())), result_qos(1000))
         node.create_subscription(ImpedanceProfile, PROFILE_TOPIC, self.profiles.append, result_qos(1000))
+        self.progress: list[tuple[str, int, float]] = []  # (node, inputs received, wall arrival)
+        node.create_subscription(Progress, PROGRESS_TOPIC, lambda m: self.progress.append((m.node, sum(m.received), time.monotonic())), result_qos(1000))
 
     def _on_event(self, msg):
         if msg.event_type == StanceEvent.TOUCHDOWN:
@@ -103,6 +108,13 @@ def test_killed_node_resumes_with_next_complete_stance(tmp_path, victim):
         old_readers = _reader_gids(node, WATCH[victim])
         children |= start_children((victim,), cfg, tmp_path)
         assert _spin_until(executor, lambda: _reader_gids(node, WATCH[victim]) - old_readers, 60, alive)
+        if victim == "inverse_dynamics":
+            # its inputs flow again once the replay has matched the new readers (DDS discovery, can take
+            # seconds under load): the first progress report of the new process with data received
+            def receiving():
+                return [w for n, r, w in col.progress if n == "/" + victim and r > 0 and w > t_kill]
+
+            assert _spin_until(executor, receiving, 60, alive), "restarted inverse_dynamics never received data"
         t_up = time.monotonic()
 
         def after():
