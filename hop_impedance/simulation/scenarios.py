@@ -43,23 +43,6 @@ EXTRA_B1 = (0.05, 0.05, 0.02)  # N m s^2/rad^2
 #: Push-off shape over the joints (ankle-dominated) and default base amplitude (N m).
 PUSH_OFF_WEIGHTS = (1.0, 0.6, 0.3)
 PUSH_OFF_BASE_NM = 40.0
-#: Push-off timing as fractions of the nominal (passive) stance time: onset and duration.
-#: Late in stance, as the issue asks ("an extensor moment with its own time course
-#: late in stance"): onset at 65 % of the nominal stance, duration to the nominal
-#: take-off. Why late: a push-off that starts before maximal flexion (the former
-#: 35 %/60 % timing, onset ~96 ms into a ~208 ms stance at 2.20 Hz) adds moment
-#: while the joint is still loading, where it is indistinguishable from extra
-#: stiffness (k0 up, k1 down in the seed's fit). Started after maximal flexion
-#: it acts only during extension. The nominal (passive, slower touchdown)
-#: stance is longer than the calibrated one, so 65 % of it is ~70 % of the
-#: actual stance, after the ankle's (~46 %), knee's (~60 %) and hip's (~64 %)
-#: maximal flexion at 2.20 Hz; 60 % put the onset within 1 ms of the hip's
-#: maximal flexion. Checked for every frequency and surface in
-#: test/simulation/test_sim_trials.py. The amplitude is not chosen here: the
-#: calibration scales it to what holds the hop height (``PUSH_OFF_BASE_NM`` is
-#: only its starting value).
-PUSH_OFF_ONSET_FRACTION = 0.65
-PUSH_OFF_DURATION_FRACTION = 0.35
 #: Time-based activation (seed 001 / Hurst): a_min and tau (s).
 ACTIVATION = TimeActivation(a_min=0.3, tau_s=0.04)
 
@@ -140,15 +123,11 @@ def hopping_config(
     unexpected_hops: tuple[int, ...] = (),
     calibration_surface: str | None = None,
     variability: bool = True,
-    push_onset_fraction: float = PUSH_OFF_ONSET_FRACTION,
-    push_duration_fraction: float = PUSH_OFF_DURATION_FRACTION,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
     The push-off is timed from a passive stance on the calibration surface:
-    onset at ``push_onset_fraction`` (default 65 %) of that stance and
-    duration ``push_duration_fraction`` (default 35 %: to the nominal
-    take-off), see :data:`PUSH_OFF_ONSET_FRACTION`. ``calibration_surface``
+    onset at 35 % and duration 60 % of that stance. ``calibration_surface``
     (default: the trial's surface) is the surface the law is tuned for; with
     ``unexpected_surface`` the listed hops land on that surface instead.
     """
@@ -156,7 +135,7 @@ def hopping_config(
     expected = surface(calibration_surface or surface_name)
     passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0)
     ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
-    law = build_law(freq_hz, effects, push_onset_fraction * ts, push_duration_fraction * ts)
+    law = build_law(freq_hz, effects, 0.35 * ts, 0.6 * ts)
     config = HoppingConfig(
         freq_hz=freq_hz,
         n_hops=n_hops,

@@ -12,7 +12,6 @@ from hop_impedance.simulation.ground import HARD, SOFT
 from hop_impedance.simulation.hopping_trial import (
     calibrate,
     leg_stiffness_n_m,
-    push_off_part,
     scale_push_off,
     simulate_hopping,
     touchdown_posture,
@@ -215,35 +214,3 @@ def test_each_law_effect_switches_on_its_own_and_keeps_a_sane_stance(name):
         assert np.abs(st.omega_rad_s).max() < 30.0  # no whipping segment
         out.append(st.moments_nm)
     assert np.abs(out[1] - out[0]).max() > 0.5
-
-
-@pytest.mark.parametrize("freq,surface_name", [
-    (2.2, "hard"),
-    pytest.param(1.53, "hard", marks=pytest.mark.slow),
-    pytest.param(1.87, "hard", marks=pytest.mark.slow),
-    pytest.param(2.2, "soft", marks=pytest.mark.slow),
-])
-def test_push_off_starts_after_maximal_flexion_and_holds_the_hop(freq, surface_name):
-    """The default push-off acts only during extension (after every joint's maximal flexion).
-
-    A push-off that overlaps the loading phase is confounded with joint
-    stiffness (see ``PUSH_OFF_ONSET_FRACTION``). On the calibrated periodic hop
-    each joint's maximal flexion must come before the onset, the hop must
-    repeat (next touchdown speed = this one, period = 1/freq, both checked by
-    ``calibrate``'s success) and the push-off must be positive and smaller than
-    the joint moment it adds to.
-    """
-    chain, cfg = hopping_config(freq, surface_name, 1, variability=False)
-    q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
-    cal = calibrate(chain, cfg, q)
-    assert cal["success"], cal
-    law = scale_push_off(cfg.law, cal["push_scale"])
-    push = push_off_part(law)
-    st = simulate_stance(chain, law, cfg.surface, touchdown_state(chain, q, np.array([0.0, -cal["speed_m_s"]]), 0.0))
-    assert st.end_reason == "take_off"
-    t_max_flexion = st.t_s[np.argmax(st.rho_rad, axis=0)]
-    assert np.all(t_max_flexion < push.onset_s), (t_max_flexion, push.onset_s)
-    assert push.onset_s > 0.5 * st.duration_s
-    assert np.all(push.amplitude_nm > 0)
-    assert np.all(push.moments_nm(st.t_s, st.rho_rad, st.omega_rad_s, None, st.ref)[st.t_s < push.onset_s] == 0)
-    assert np.all(push.amplitude_nm < 0.5 * st.moments_nm.max(axis=0))
