@@ -87,24 +87,13 @@ def copy_messages(path: str, writer: McapWriter, topics: tuple[str, ...] = (FORC
 
 
 def main(args=None) -> None:
-    """Run the node (``python -m hop_impedance.nodes.recorder --ros-args -p output:=OUT.mcap``)."""
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
+    """Run the node (``python -m hop_impedance.nodes.recorder --ros-args -p output:=OUT.mcap``).
 
-    from hop_impedance.nodes.common import make_executor, spin_until_shutdown
+    The file is finished in :meth:`RecorderNode.destroy_node`, which ``spin_node`` calls on exit.
+    """
+    from hop_impedance.nodes.common import spin_node
 
-    with rclpy.init(args=args):
-        node = None
-        try:
-            node = RecorderNode()
-            executor = make_executor()
-            executor.add_node(node)
-            spin_until_shutdown(executor)
-        except (KeyboardInterrupt, ExternalShutdownException):
-            pass
-        finally:
-            if node is not None:
-                node.close()
+    spin_node(RecorderNode, args)
 
 
 if __name__ == "__main__":
