@@ -330,6 +330,14 @@ def fit_joint_stance(
         effective_samples=n_eff,
     )
 
+    if not any(name.startswith("k") for name in terms):
+        # Nothing spring-like survived the F-tests: publishing a "solved" fit
+        # would present an intercept (or a damper) as this joint's impedance.
+        return _rejected(
+            f"model reduction kept no stiffness term (none of k0..k3 significant at alpha={options.alpha})",
+            terms=terms,
+            **common,
+        )
     columns = parameter_indices(terms)
     X = regs.moment_rows[window][:, columns]
     A, _ = constraint_rows(regs, columns)

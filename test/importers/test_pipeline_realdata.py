@@ -78,6 +78,15 @@ def test_impedance_profiles_for_the_landing(landing):
         for k in range(3)
     ]
     assert all(f.status in ("solved", "rejected") for f in fits)
+    # A fit is either a spring (some stiffness term kept) or an explicit rejection:
+    # at the ankle of this long drop-jump contact the F-tests keep no stiffness term.
+    for fit in fits:
+        if fit.status == "solved":
+            assert any(t.startswith("k") for t in fit.terms), fit.terms
+        else:
+            assert fit.rejection_reason
+    ankle = fits[0]
+    assert ankle.status == "rejected" and "kept no stiffness term" in ankle.rejection_reason
     knee, hip = fits[1], fits[2]
     for fit in (knee, hip):
         assert fit.rejection_reason is None
