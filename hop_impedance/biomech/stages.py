@@ -205,12 +205,15 @@ class StanceAnalysisStage:
         return out
 
     def _reject_on_loss(self, result: StanceResult, data: SpanData) -> StanceResult:
-        """Drop the joint data of a stance whose samples have holes (see Message loss)."""
-        if result.rejection_reason is not None:
-            return result
+        """Drop the joint data of a stance whose samples have holes (see Message loss).
+
+        Loss is named first even when the analysis already rejected the stance
+        for a reason the loss caused (e.g. too few force samples left in it).
+        """
         reason = missing_samples_reason(data, result.touchdown_s, result.takeoff_s, self.options.max_gap_s)
         if reason is not None:
-            result.rejection_reason = reason
+            earlier = result.rejection_reason
+            result.rejection_reason = reason if earlier is None else f"{reason}; {earlier}"
             result.joints = None
         return result
 
