@@ -247,6 +247,8 @@ def analyze_span(
     if model is None or data.marker_t_s is None or len(data.marker_t_s) < 8:
         span_reason = "no marker data"
     else:
+        span_reason = _too_sparse_reason(t, data.marker_t_s, options)
+    if span_reason is None:
         fs = sampling_rate_hz(t)
         smooth = lowpass(zeroed, fs, options.force_cutoff_hz)
         kin, gaps = compute_kinematics(
@@ -255,6 +257,22 @@ def analyze_span(
         loads = inverse_dynamics_2d(kin.points_xz, kin.com_xz, kin.com_acc, kin.qdd, smooth, model)
     weight = body_mass_kg * GRAVITY_M_S2
     return [_stance_result(k, stances, t, zeroed, kin, loads, gaps, span_reason, model, body_mass_kg, weight, options) for k in targets]
+
+
+def _too_sparse_reason(force_t_s: np.ndarray, marker_t_s: np.ndarray, options: AnalysisOptions) -> str | None:
+    """Why a window cannot be filtered: a median sampling rate at or below twice the cut-off.
+
+    Happens when most messages of a window were lost (a live stream under
+    overload); the stance is then rejected instead of the filter raising.
+    """
+    for name, t_s, cutoff in (("force", force_t_s, options.force_cutoff_hz), ("marker", marker_t_s, options.marker_cutoff_hz)):
+        fs = sampling_rate_hz(t_s)
+        if not fs > 2.0 * cutoff:
+            return (
+                f"{name} samples too sparse in this window (median rate {fs:.1f} Hz, the {cutoff:g} Hz "
+                f"low-pass needs more than {2 * cutoff:g} Hz): message loss"
+            )
+    return None
 
 
 def _stance_result(k, stances, t, zeroed, kin, loads, gaps, span_reason, model, mass, weight, options) -> StanceResult:

@@ -173,3 +173,28 @@ def test_bundled_simulated_recordings_true_moments(truth_path):
             assert rms < limit * np.max(np.abs(true_m[:, j])), (ts["index"], j, rms)
         checked += 1
     assert checked == len(truth["stances"]) == 10
+
+
+def test_window_with_most_force_samples_lost_is_rejected_not_raised():
+    """A live window in which most force messages were lost (median rate 20 Hz, below twice the
+    12 Hz cut-off) must give stances rejected for message loss instead of a filter error that
+    would stop the inverse_dynamics node (seen in an overloaded pipeline run)."""
+    from hop_impedance.io.recording_io import load_recording
+    from hop_impedance.recording import ForcePlateSeries, Recording
+
+    rec = load_recording(Path(__file__).resolve().parents[2] / "recordings" / "sim_2p20hz_hard.mcap")
+    f = rec.force
+    keep = slice(None, None, 50)  # 1000 Hz -> 20 Hz
+    sparse = Recording(ForcePlateSeries(f.stamp_ns[keep], f.force_n[keep], f.torque_nm[keep]), rec.markers, rec.subject)
+    stances = analyze_recording(sparse).stances
+    assert stances, "stances are still detected on the sparse force"
+    for s in stances:
+        assert s.joints is None
+        assert "too sparse" in s.rejection_reason or "incomplete" in s.rejection_reason or "too few" in s.rejection_reason
+    from hop_impedance.biomech.analysis import _too_sparse_reason
+
+    t_sparse = np.arange(0.0, 2.0, 0.05)  # 20 Hz
+    t_dense = np.arange(0.0, 2.0, 0.001)
+    reason = _too_sparse_reason(t_sparse, t_dense[::10], AnalysisOptions())
+    assert "force samples too sparse" in reason and "message loss" in reason
+    assert _too_sparse_reason(t_dense, t_dense[::10], AnalysisOptions()) is None
