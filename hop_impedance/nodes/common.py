@@ -65,6 +65,21 @@ def declare(node: Node, name: str, default, description: str):
     return node.declare_parameter(name, default, ParameterDescriptor(description=description)).value
 
 
+def declare_stream_parameters(node: Node, work: str) -> tuple[bool, float, float, float]:
+    """Declare the parameters every sensor-stream consumer shares and return their values.
+
+    Returns ``(reliable_inputs, reorder_window_s, process_period_s,
+    diagnostics_period_s)``; ``work`` names what runs every period (for the
+    parameter's description), e.g. ``"the detector"``.
+    """
+    return (
+        declare(node, "reliable_inputs", True, "match reliable publishers (replay, many mocap drivers); false = sensor-data best effort"),
+        declare(node, "reorder_window_s", 0.02, "hold samples this long (stamp time, s) to sort out-of-order arrivals"),
+        declare(node, "process_period_s", 0.005, f"run {work} on the buffered samples this often (s)"),
+        declare(node, "diagnostics_period_s", 1.0, "publish /diagnostics this often (s); 0 = never"),
+    )
+
+
 def stamp_ns(stamp) -> int:
     """``builtin_interfaces/Time`` -> integer ns."""
     return stamp.sec * 1_000_000_000 + stamp.nanosec

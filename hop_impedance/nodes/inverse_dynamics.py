@@ -46,7 +46,7 @@ from hop_impedance.biomech.kinematics import body_model_from_markers
 from hop_impedance.biomech.stages import StanceAnalysisStage
 from hop_impedance.nodes.common import (
     END_TOPIC, JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC, Diagnostics, InputTracker, ProgressReporter,
-    ReorderBuffer, declare, seconds_to_ns, set_stamp, stamp_ns, wrench_from_cdr,
+    ReorderBuffer, declare, declare_stream_parameters, seconds_to_ns, set_stamp, stamp_ns, wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
 from hop_impedance.recording import FORCE_TOPIC, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, MarkerSeries, Subject
@@ -58,10 +58,7 @@ class InverseDynamicsNode(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__("inverse_dynamics", **kwargs)
-        reliable = declare(self, "reliable_inputs", True, "match reliable publishers (replay, many mocap drivers); false = sensor-data best effort")
-        reorder_s = declare(self, "reorder_window_s", 0.02, "hold samples this long (stamp time, s) to sort out-of-order arrivals")
-        period = declare(self, "process_period_s", 0.005, "run the stage on the buffered samples this often (s)")
-        diag = declare(self, "diagnostics_period_s", 1.0, "publish /diagnostics this often (s); 0 = never")
+        reliable, reorder_s, period, diag = declare_stream_parameters(self, "the stage")
         self.calibration_s = declare(self, "calibration_s", 1.0, "scale the body model from the first this many seconds of complete marker frames")
         self.publish_frames = declare(self, "publish_frames", True, "publish per-frame JointKinetics of each analysed stance")
         self.sex = declare(self, "sex", "female", "de Leva table: female or male (not in SubjectInfo)")

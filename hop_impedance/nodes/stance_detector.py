@@ -25,7 +25,7 @@ from std_msgs.msg import Header
 from hop_impedance.biomech.stages import StanceDetectorStage, pending_stance
 from hop_impedance.biomech.stance_detection import DetectorOptions
 from hop_impedance.nodes.common import (
-    END_TOPIC, EVENTS_TOPIC, Diagnostics, InputTracker, ProgressReporter, ReorderBuffer, declare, seconds_to_ns,
+    END_TOPIC, EVENTS_TOPIC, Diagnostics, InputTracker, ProgressReporter, ReorderBuffer, declare, declare_stream_parameters, seconds_to_ns,
     set_stamp, stamp_ns, wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
@@ -38,10 +38,7 @@ class StanceDetectorNode(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__("stance_detector", **kwargs)
-        reliable = declare(self, "reliable_inputs", True, "match reliable publishers (replay, many mocap drivers); false = sensor-data best effort")
-        reorder_s = declare(self, "reorder_window_s", 0.02, "hold samples this long (stamp time, s) to sort out-of-order arrivals")
-        period = declare(self, "process_period_s", 0.005, "run the detector on the buffered samples this often (s)")
-        diag = declare(self, "diagnostics_period_s", 1.0, "publish /diagnostics this often (s); 0 = never")
+        reliable, reorder_s, period, diag = declare_stream_parameters(self, "the detector")
         opts = DetectorOptions(
             touchdown_n=declare(self, "touchdown_n", 40.0, "touchdown threshold above the flight baseline (N)"),
             takeoff_n=declare(self, "takeoff_n", 20.0, "take-off threshold above the flight baseline (N)"),
