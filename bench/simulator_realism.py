@@ -28,9 +28,12 @@ HOPEXO = Path("/work/shared/data_candidates/hopexo_2p4hz")
 
 #: Seed paper Table 1 (means) at 1.53 / 1.87 / 2.20 Hz.
 SEED_TABLE1 = {
-    1.53: {"grf_bw": 2.5, "stance_ms": 458, "hip_exc_m": 0.27, "rom": (0.85, 0.70, 0.37), "mmax": (233.4, 96.8, 26.4)},
-    1.87: {"grf_bw": 3.0, "stance_ms": 333, "hip_exc_m": 0.22, "rom": (0.69, 0.42, 0.18), "mmax": (281.3, 115.3, 28.9)},
-    2.20: {"grf_bw": 3.5, "stance_ms": 282, "hip_exc_m": 0.18, "rom": (0.59, 0.27, 0.11), "mmax": (359.2, 123.8, 36.1)},
+    1.53: {"grf_bw": 2.5, "stance_ms": 458, "hip_exc_m": 0.27, "rom": (0.85, 0.70, 0.37), "mmax": (233.4, 96.8, 26.4),
+           "brake_j": (51.8, 15.2, 0.7)},
+    1.87: {"grf_bw": 3.0, "stance_ms": 333, "hip_exc_m": 0.22, "rom": (0.69, 0.42, 0.18), "mmax": (281.3, 115.3, 28.9),
+           "brake_j": (30.0, 6.9, 0.6)},
+    2.20: {"grf_bw": 3.5, "stance_ms": 282, "hip_exc_m": 0.18, "rom": (0.59, 0.27, 0.11), "mmax": (359.2, 123.8, 36.1),
+           "brake_j": (21.1, 2.2, 0.4)},
 }
 
 
@@ -45,6 +48,14 @@ def hopexo_means() -> dict:
         rows = [r for r in csv.DictReader(fh) if r["con"] == "nh" and r["peak"] == "rom"]
     out["rom_deg"] = tuple(float(np.mean([float(r["value"]) for r in rows if r["joint"] == j])) for j in ("ank", "kne", "hip"))
     return out
+
+
+def brake_and_push_j(st) -> tuple[np.ndarray, np.ndarray]:
+    """Per joint: energy absorbed (brake, J, >= 0) and generated (push, J) over the stance, P = -M drho/dt."""
+    power = -st.moments_nm * st.omega_rad_s
+    brake = -np.trapezoid(np.minimum(power, 0.0), st.t_s, axis=0)
+    push = np.trapezoid(np.maximum(power, 0.0), st.t_s, axis=0)
+    return brake, push
 
 
 def measure(freq_hz: float, hops: int = 6, seed: int = 1) -> dict:
@@ -65,6 +76,8 @@ def measure(freq_hz: float, hops: int = 6, seed: int = 1) -> dict:
             "rom": st.rho_rad.max(axis=0) - st.rho_rad[0],
             "mmax": st.moments_nm.max(axis=0),
             "k_leg": k_leg,
+            "brake_j": brake_and_push_j(st)[0],
+            "push_j": brake_and_push_j(st)[1],
         })
     t = np.arange(trial.stances[1].t_touchdown_s, trial.stances[-1].t_touchdown_s, 0.001)
     rho_cycle = trial.sample(t)["g"][:, 2:] @ np.array([[1, 0, 0], [-1, -1, 0], [0, 1, 1], [0, 0, -1]])
@@ -94,6 +107,12 @@ def table(results: dict, hopexo: dict) -> str:
         row(f"{name} range of flexion (rad)", [results[f]["rom"][j] for f in fs], [SEED_TABLE1[f]["rom"][j] for f in fs], "{:.2f}")
     for j, name in enumerate(("ankle", "knee", "hip")):
         row(f"{name} max moment (N m)", [results[f]["mmax"][j] for f in fs], [SEED_TABLE1[f]["mmax"][j] for f in fs], "{:.0f}")
+    for j, name in enumerate(("ankle", "knee", "hip")):
+        row(f"{name} brake-phase energy (J)", [results[f]["brake_j"][j] for f in fs],
+            [SEED_TABLE1[f]["brake_j"][j] for f in fs], "{:.1f}")
+    for j, name in enumerate(("ankle", "knee", "hip")):
+        row(f"{name} push-phase energy (J) / seed brake (seed: push = brake)",
+            [results[f]["push_j"][j] for f in fs], [SEED_TABLE1[f]["brake_j"][j] for f in fs], "{:.1f}")
     row("leg stiffness, peak F / COM-toe compression (kN/m)", [results[f]["k_leg"] / 1000 for f in fs],
         [9.8, 14.6, 20.9], "{:.1f}")
     r = results[2.4]
@@ -126,7 +145,11 @@ def main() -> None:
             "# Simulator realism\n\nProduced by `.venv/bin/python bench/simulator_realism.py --write`; every "
             "simulated figure is measured by that command (noise-free trials, hard surface, default law: seed "
             "Table 2 k0/k1, b0 = 0.5 N m s/rad, push-off; subject 54.8 kg, 1.63 m; mean of hops 2-6). "
-            "Cells read *simulated / published*. Range of flexion = maximal rho in stance minus rho at touchdown.\n\n"
+            "Cells read *simulated / published*. Range of flexion = maximal rho in stance minus rho at touchdown. "
+            "Brake/push-phase energy: integral of the negative/positive joint power P = -M drho/dt over the stance. "
+            "The seed's brake energies are about half of what its own moments and ranges imply for a spring-like joint "
+            "(ankle 1.53 Hz: 0.5 x 233 N m x 0.85 rad = 99 J against 51.8 J), so they are probably per leg while its "
+            "moments are both legs (as ours are); read the simulated energies against twice the seed's.\n\n"
             + text + "\n\n" + "\n".join(f"- note: {n}" for n in notes) + "\n"
         )
         print(f"wrote {doc}")
