@@ -47,6 +47,16 @@ def hopexo_means() -> dict:
     with open(HOPEXO / "ang_data.csv", newline="") as fh:
         rows = [r for r in csv.DictReader(fh) if r["con"] == "nh" and r["peak"] == "rom"]
     out["rom_deg"] = tuple(float(np.mean([float(r["value"]) for r in rows if r["joint"] == j])) for j in ("ank", "kne", "hip"))
+    with open(HOPEXO / "pow_data.csv", newline="") as fh:
+        rows = [r for r in csv.DictReader(fh) if r["con"] == "nh" and r["cont"] == "net"]
+    for kind in ("pos", "neg"):
+        out[f"power_{kind}_w_kg"] = tuple(
+            float(np.mean([float(r["value"]) for r in rows if r["joint"] == j and r["pow"] == kind]))
+            for j in ("ank", "kne", "hip"))
+    with open(HOPEXO / "mom_data.csv", newline="") as fh:
+        rows = [r for r in csv.DictReader(fh) if r["con"] == "nh" and r["cont"] == "net"]
+    out["moment_nm_kg"] = tuple(float(np.mean([float(r["value"]) for r in rows if r["joint"] == j]))
+                                for j in ("ank", "kne", "hip"))
     return out
 
 
@@ -78,12 +88,18 @@ def measure(freq_hz: float, hops: int = 6, seed: int = 1) -> dict:
             "k_leg": k_leg,
             "brake_j": brake_and_push_j(st)[0],
             "push_j": brake_and_push_j(st)[1],
+            "moment_integral_nm_s": np.trapezoid(st.moments_nm, st.t_s, axis=0),
         })
     t = np.arange(trial.stances[1].t_touchdown_s, trial.stances[-1].t_touchdown_s, 0.001)
     rho_cycle = trial.sample(t)["g"][:, 2:] @ np.array([[1, 0, 0], [-1, -1, 0], [0, 1, 1], [0, 0, -1]])
     td = np.array([r.t_touchdown_s for r in trial.stances])
     mean = {k: np.mean([r[k] for r in rows], axis=0) for k in rows[0]}
     mean["freq_hz"] = 1.0 / np.mean(np.diff(td))
+    # HopExo convention: averages over the whole hop cycle, per leg (our moments are both legs), per kg.
+    per_leg_kg_cycle = mean["freq_hz"] / (2.0 * chain.total_mass_kg)
+    mean["power_pos_w_kg"] = mean["push_j"] * per_leg_kg_cycle
+    mean["power_neg_w_kg"] = -mean["brake_j"] * per_leg_kg_cycle
+    mean["moment_nm_kg"] = mean["moment_integral_nm_s"] * per_leg_kg_cycle
     mean["rom_cycle_deg"] = np.degrees(np.ptp(rho_cycle, axis=0))
     mean["notes"] = trial.notes
     return mean
@@ -123,6 +139,13 @@ def table(results: dict, hopexo: dict) -> str:
               f"{hopexo['fz']:.0f} (body mass not given; ~3 BW at ~75 kg) |"]
     for j, name in enumerate(("ankle", "knee", "hip")):
         lines.append(f"| {name} range over the hop cycle (deg) | {r['rom_cycle_deg'][j]:.1f} | {hopexo['rom_deg'][j]:.1f} |")
+    for j, name in enumerate(("ankle", "knee", "hip")):
+        lines.append(f"| {name} mean positive / negative power (W/kg, per leg, hop cycle) | "
+                     f"{r['power_pos_w_kg'][j]:.2f} / {r['power_neg_w_kg'][j]:.2f} | "
+                     f"{hopexo['power_pos_w_kg'][j]:.2f} / {hopexo['power_neg_w_kg'][j]:.2f} |")
+    for j, name in enumerate(("ankle", "knee", "hip")):
+        lines.append(f"| {name} mean moment (N m/kg, per leg, hop cycle; extensor +) | "
+                     f"{r['moment_nm_kg'][j]:.2f} | {hopexo['moment_nm_kg'][j]:.2f} |")
     return "\n".join(lines)
 
 
