@@ -83,18 +83,31 @@ def test_without_push_off_the_lossy_hops_decay():
 
 
 def test_unexpected_hard_surface_lowers_leg_stiffness_as_in_seed_001():
-    """Same time-based activation, same touchdown: leg stiffness lower on unexpected hard than on expected soft."""
+    """Same time-based activation, same touchdown: leg stiffness lower on unexpected hard than on expected soft.
+
+    Also the joint-level picture of seed 001 and of Moritz & Farley 2004
+    (/work/shared/data_candidates/published_refs): more ankle and knee flexion,
+    less extra hip flexion, and the difference already there 52 ms after landing.
+    """
     chain, cfg = hopping_config(2.2, "soft", 1, Effects(time_activation=True), variability=False)
     q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
     cal = calibrate(chain, cfg, q)
     assert cal["success"]
     law = scale_push_off(cfg.law, cal["push_scale"])
     td = touchdown_state(chain, q, np.array([0.0, -cal["speed_m_s"]]), 0.0)
-    soft = leg_stiffness_n_m(chain, simulate_stance(chain, law, SOFT, td))
-    hard = leg_stiffness_n_m(chain, simulate_stance(chain, law, HARD, td))
+    soft_stance, hard_stance = simulate_stance(chain, law, SOFT, td), simulate_stance(chain, law, HARD, td)
+    soft, hard = leg_stiffness_n_m(chain, soft_stance), leg_stiffness_n_m(chain, hard_stance)
     assert hard[0] < 0.97 * soft[0]  # lower leg stiffness ...
     assert hard[2] > soft[2]  # ... from larger leg compression
     assert hard[1] > soft[1]  # while the peak force is higher (seed 001, Fig. 4A)
+    # Seed 001: "increased flexion in the ankle and knee joint and, to a lesser extent, in the hip joint".
+    extra = (np.max(hard_stance.rho_rad, axis=0) - hard_stance.rho_rad[0]) - (
+        np.max(soft_stance.rho_rad, axis=0) - soft_stance.rho_rad[0]
+    )
+    assert extra[0] > 0.02 and extra[1] > 0.02 and 0.0 < extra[2] < min(extra[0], extra[1])  # measured 0.048/0.044/0.032
+    # Moritz & Farley 2004 (abstract): on the surprise hard surface joint flexion increased within 52 ms of landing.
+    ankle_at_52ms = [np.interp(0.052, st.t_s, st.rho_rad[:, 0]) for st in (hard_stance, soft_stance)]
+    assert ankle_at_52ms[0] - ankle_at_52ms[1] > 0.02  # rad (measured 0.07)
 
 
 def test_sensor_geometry_cop_and_effects(trial_22):
