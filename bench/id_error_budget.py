@@ -85,6 +85,19 @@ def k_errors(t, rho, omega, moment, true_impedance, options) -> list[float]:
     return [fit.coefficients[k] / true_impedance[k] - 1.0 for k in ("k0", "k1")]
 
 
+def edge_steps(true_stance: dict) -> str:
+    """The simulator's loads at the stance edges: what a low-pass has to follow there.
+
+    Fz 1 ms after touchdown (the surface law's damping step), Fx and the hip
+    moment at the last sample before take-off (hip as % of its peak |moment|).
+    """
+    s = true_stance["samples"]
+    grf = np.asarray(s["grf_n"], float)
+    hip = np.asarray(s["moments_nm"], float)[:, 2]
+    return (f"truth: Fz {grf[1, 1]:.0f} N at touchdown + 1 ms, at take-off Fx {grf[-1, 0]:.0f} N, Fz {grf[-1, 1]:.0f} N, "
+            f"hip {hip[-1]:.1f} N m ({100 * abs(hip[-1]) / np.max(np.abs(hip)):.0f} % of peak)")
+
+
 def stance_budget(stance, true_stance, options) -> dict:
     """Phase RMS errors (% of peak) and k0/k1 errors (%) per joint of one analysed stance."""
     s = true_stance["samples"]
@@ -109,6 +122,13 @@ def stance_budget(stance, true_stance, options) -> dict:
             row["rms"][name] = 100 * np.sqrt(np.mean(err[sel] ** 2)) / peak
             row["k"][name] = k_errors(t_rel, rho, omega, m_true + np.where(sel, err, 0.0), imp, options)
         row["k"]["id"] = k_errors(t_rel, rho, omega, m_id, imp, options)
+        truth_fit = fit_joint_stance(tt - tt[0], np.asarray(s["rho_rad"], float)[:, j],
+                                     np.asarray(s["omega_rad_s"], float)[:, j], true_m[:, j], options)
+        row["k"]["truth"] = [truth_fit.coefficients[k] / imp[k] - 1.0 for k in ("k0", "k1")]
+        row["active"] = truth_fit.active_constraints
+        # Local stiffness of the simulated law, K = k0 + k1 (rho - rho0) (Eq. 3 without k2, k3), at its lowest.
+        d = np.asarray(s["rho_rad"], float)[:, j] - imp["rho0_rad"]
+        row["k_min"] = float(np.min(imp["k0"] + imp["k1"] * d))
         row["k"]["kin"] = k_errors(t_rel, rho, omega, m_true, imp, options)
         out[joint] = row
     return out
@@ -137,7 +157,7 @@ def main() -> None:
     budgets = []
     print(f"{args.frequency} Hz {args.noise}, markers at {args.marker_rate:g} Hz, cut-off {args.cutoff:g} Hz (force {args.force_cutoff or args.cutoff:g} Hz), "
           f"{1e3 * args.edge:g} ms left out of the fit at each edge")
-    print("joint: ID error RMS % of peak td/mid/to | k0,k1 error % for id, kin, td, mid, to")
+    print("joint: ID error RMS % of peak td/mid/to | k0,k1 error % for id, kin, td, mid, to, truth (active constraints)")
     for stance in analysis.stances:
         true_stance = by_touchdown.get(round(stance.touchdown_s, 2))
         if true_stance is None or stance.rejection_reason is not None:
@@ -145,17 +165,17 @@ def main() -> None:
         b = stance_budget(stance, true_stance, fit_options)
         budgets.append(b)
         print(f"stance {stance.index} (touchdown {1e3 * (stance.touchdown_s - true_stance['touchdown_s']):+.1f} ms, "
-              f"take-off {1e3 * (stance.takeoff_s - true_stance['takeoff_s']):+.1f} ms vs truth)")
+              f"take-off {1e3 * (stance.takeoff_s - true_stance['takeoff_s']):+.1f} ms vs truth); {edge_steps(true_stance)}")
         for joint, row in b.items():
             rms = "/".join(f"{row['rms'][p]:.1f}" for p in PHASES)
-            ks = "  ".join(f"{n} {100 * row['k'][n][0]:+5.1f},{100 * row['k'][n][1]:+5.1f}" for n in ("id", "kin", "td", "mid", "to"))
-            print(f"  {joint:5s} {rms:15s} | {ks}")
+            ks = "  ".join(f"{n} {100 * row['k'][n][0]:+5.1f},{100 * row['k'][n][1]:+5.1f}" for n in ("id", "kin", "td", "mid", "to", "truth"))
+            print(f"  {joint:5s} {rms:15s} | {ks} ({row['active']} active; law's min K {row['k_min']:.0f} N m/rad)")
     print("median over stances")
     for joint in JOINTS:
         rms = "/".join(f"{np.median([b[joint]['rms'][p] for b in budgets]):.1f}" for p in PHASES)
         ks = "  ".join(
             f"{n} " + ",".join(f"{100 * v:+5.1f}" for v in np.median([b[joint]["k"][n] for b in budgets], axis=0))
-            for n in ("id", "kin", "td", "mid", "to")
+            for n in ("id", "kin", "td", "mid", "to", "truth")
         )
         print(f"  {joint:5s} {rms:15s} | {ks}")
     print(f"CPU {time.process_time() - cpu0:.1f} s (simulation {cpu_sim:.1f} s)")

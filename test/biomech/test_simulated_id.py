@@ -1,10 +1,10 @@
 """Inverse dynamics against the simulator's true joint moments when the markers resolve the stance edges.
 
 The simulated hard-surface stance starts with a force step (the surface law
-Fz = 3.1e6 y^2 - 186.3 ydot jumps to 150-500 N at touchdown, the foot's
-angular acceleration to 460-1580 rad/s^2) and ends with the horizontal force
-still at 35-85 N when Fz reaches zero (bench/id_error_budget.py, the notes in
-docs/impedance_model.md, "Recordings"). No low-pass that removes marker noise
+Fz = 3.1e6 y^2 - 186.3 ydot is at 140-470 N 1 ms after touchdown) and ends
+with the horizontal force still at 27-85 N at the last sample before
+take-off (Fz 1-24 N), figures printed by bench/id_error_budget.py (see the
+module docstring of test/impedance/test_simulated_recordings.py). No low-pass that removes marker noise
 can follow those edges, so the 100 Hz / 12-20 Hz analysis of the recordings
 misses the true moment there. Here the same noise-free trial is sampled with
 1 kHz markers and analysed at a 100 Hz cut-off: then every joint moment must

@@ -23,9 +23,40 @@ question here is the value of the coefficients. The figure compared is the
 median over the stances of a trial (4 hops) of the relative error of k0 and
 k1; b0 = 0.5 N m s/rad contributes under 1 % of the moment and is not
 compared. Combinations that miss the brief's target (2 % noise-free, 10 %
-noisy) are marked ``xfail(strict=True)`` with the measured error: they are
-open problems of the inverse dynamics (the hip moment needs three segment
-accelerations from 100 Hz markers) and fail loudly the day they pass.
+noisy) are marked ``xfail(strict=True)`` with the measured error and fail
+loudly the day they pass.
+
+Where the misses come from (``bench/id_error_budget.py``, which fits the true
+moment with the ID error added in one stance phase only, or the analysis'
+angles with the true moment):
+
+- The inverse dynamics is exact where the data resolve the motion: with
+  1 kHz markers and a 100 Hz cut-off the same trial's moments match the truth
+  within 0.06 % of peak in the middle 80 % of stance and k0/k1 within 0.1 %
+  (test/biomech/test_simulated_id.py). 100 Hz markers are not the limit
+  either: 1 kHz markers at the test's 20 Hz give about the same errors (hip
+  at 1.87 Hz: k0 +2.4 %, k1 -4.7 % vs +2.8 %, -5.5 %).
+- The stance edges of the simulated hop hold steps that a 12-20 Hz low-pass
+  spreads over ~30 ms: Fz is 140-470 N 1 ms after touchdown (the surface
+  law's damping at the landing speed), and at the last sample before
+  take-off Fx is still 27-85 N (Fz 1-24 N) and the hip moment 5-29 N m
+  (15-46 % of its peak).
+  Noise-free, the hip's ID error is 7-29 % of its peak RMS in the last 10 %
+  of stance at 1.87 Hz against 1.3-1.4 % in the middle 80 %; at 1.53 and
+  1.87 Hz the take-off 10 % alone reproduces the hip's k error (median k0/k1
+  +12/-21 % and +3/-5 % with the ID error there only), at 2.2 Hz touchdown,
+  middle and take-off contribute comparable parts (each 1-4 % on k1).
+- 1.53 Hz hip, first stance: the fit of the simulator's own 1 kHz samples
+  gives k0 +14 %, k1 -22 % by itself (2 active constraints), because the
+  simulated law's local stiffness k0 + k1 (rho - rho0) reaches -43 N m/rad
+  when the hip extends past its touchdown angle, where the seed's constraint
+  K >= 0 (Eq. 7) forbids it. With 3 usable stances this sets the median.
+- Realistic noise: at 2.2 Hz half of the ankle and knee error is the 12 Hz
+  low-pass itself (noise-free at 12 Hz: ankle +7 %, knee +6 % on k0), the
+  rest is marker noise (1 mm); the hip's error comes from the middle of
+  stance, where three segments' double-differentiated marker noise reaches
+  4-8 % of its small peak moment RMS (median over stances; force noise alone
+  at 2.2 Hz: k0 +7 %, k1 -9 %, no worse than noise-free at 12 Hz).
 """
 
 from __future__ import annotations
@@ -50,15 +81,16 @@ EDGE_S = 0.010
 CUTOFF_HZ = {"clean": 20.0, "noisy": 12.0}
 TOLERANCE = {"clean": 0.02, "noisy": 0.10}
 
-#: (noise, frequency, joint) -> measured worst |median error| of k0/k1 where the target is missed.
+#: (noise, frequency, joint) -> measured worst |median error| of k0/k1 where the target is missed
+#: (re-measured with bench/id_error_budget.py; causes in the module docstring).
 MISSED_TARGETS = {
-    ("clean", 1.87, "hip"): 0.06,
-    ("clean", 2.20, "hip"): 0.09,
-    ("clean", 1.53, "hip"): 0.27,
-    ("noisy", 1.53, "hip"): 0.28,
+    ("clean", 1.87, "hip"): 0.06,  # take-off edge (k0 +3 %, k1 -6 %)
+    ("clean", 2.20, "hip"): 0.09,  # take-off edge (k0 +4 %, k1 -9 %)
+    ("clean", 1.53, "hip"): 0.22,  # Eq. 7 binds on the truth itself in stance 0 + take-off edge in stance 2
+    ("noisy", 1.53, "hip"): 0.22,  # marker noise in mid-stance
     ("noisy", 1.87, "hip"): 0.46,
     ("noisy", 2.20, "hip"): 0.30,
-    ("noisy", 2.20, "ankle"): 0.15,
+    ("noisy", 2.20, "ankle"): 0.15,  # half of it the 12 Hz low-pass (noise-free at 12 Hz: 7 %)
     ("noisy", 2.20, "knee"): 0.11,
 }
 
