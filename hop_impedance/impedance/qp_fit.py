@@ -25,9 +25,12 @@ and its polishing often fails on the near-duplicate rows. Instead:
 
 The QP on W is a relaxation of the full QP, so its optimum, once feasible for
 every row, is the optimum of the full QP (exact at convergence, up to the
-tolerance above). OSQP solves every working-set QP (it is the solver of
-record); it is run at least once even when the unconstrained optimum is
-feasible. If W would exceed ``max_working_rows``, the loop exceeds
+tolerance above). With W empty this is the unconstrained least-squares
+optimum itself: a convex QP whose unconstrained minimiser satisfies every
+constraint has that minimiser as its optimum (KKT with all multipliers 0), so
+it is returned without calling OSQP (``rounds = 0``, ``working_rows = 0``,
+``iterations = 0``). OSQP solves every QP with a non-empty working set (it is
+the solver of record for every fit where a constraint binds). If W would exceed ``max_working_rows``, the loop exceeds
 ``max_rounds``, or a working-set solve does not converge, the full row set is
 solved as before (:meth:`ConstrainedLeastSquares.solve_all_rows`: ADMM to
 ``coarse_eps`` + polishing, else ADMM to ``eps``), so a stance is rejected
@@ -135,6 +138,17 @@ def _most_violated_per_run(slack: np.ndarray, violated: np.ndarray) -> np.ndarra
     index = np.flatnonzero(violated)
     runs = np.split(index, np.flatnonzero(np.diff(index) > 1) + 1)
     return np.array([run[np.argmin(slack[run])] for run in runs], dtype=int)
+
+
+def _shows_active_row(rows: np.ndarray, x: np.ndarray, y: np.ndarray) -> bool:
+    """Whether OSQP's polish would find an active row at the ADMM iterate (x, y).
+
+    OSQP's rule (polish.c ``form_Ared``) for a row with lower bound 0: lower
+    active when ``z - l < -y``, with z ~ ``rows @ x``. Evaluated on the
+    unscaled iterate OSQP returns, so it is a guard against the "no active
+    set" print, not OSQP's own decision.
+    """
+    return bool(np.any(rows @ np.asarray(x, float) < -np.asarray(y, float)))
 
 
 class ConstrainedLeastSquares:
@@ -255,7 +269,7 @@ class ConstrainedLeastSquares:
         x = _unconstrained_optimum(P, q, Xs, ys)
         work = np.zeros(0, dtype=int)
         duals = np.zeros(0)
-        iterations, rounds = 0, 0
+        iterations, rounds, polished = 0, 0, False
         solver = self._small_solver(p)
         P_upper = _upper_values(P)
         while True:
@@ -263,7 +277,7 @@ class ConstrainedLeastSquares:
             tol = self.eps + self.eps * (float(np.abs(slack).max()) if slack.size else 0.0)
             violated = slack < -tol
             violated[work] = False
-            if rounds > 0 and not violated.any():
+            if not violated.any():  # W's optimum is feasible: it is the full QP's optimum
                 return self._result(X, y, A, x, "solved", iterations, polished, y_norm, col_norm, work.size, rounds)
             if violated.any():
                 work = np.concatenate((work, _most_violated_per_run(slack, violated)))
@@ -308,16 +322,20 @@ class ConstrainedLeastSquares:
     def _solve_rows(self, solver, P_upper, q, rows, x0, y0):
         """One OSQP solve of the scaled QP with ``rows @ x >= 0`` (padded with free rows).
 
-        Two stages as in :meth:`solve_all_rows`: ADMM to ``coarse_eps`` plus
+        Two stages as in :meth:`solve_all_rows`: ADMM to ``coarse_eps``, then
         polishing (exact KKT solution of the identified active set), accepted
         when polishing succeeded and every multiplier has the sign of an
         active lower bound (OSQP's y <= 0; a positive y means a wrongly
         guessed active row, i.e. a feasible but not optimal point); otherwise
-        ADMM continues to ``eps`` and is polished and checked again. Polishing
-        is off for an empty working set (nothing can be active, and OSQP would
-        print "Polishing not needed"); a non-empty set always has an active
-        row at its optimum, because its first rows are violated by the
-        unconstrained optimum.
+        the same at ``eps``. The working set is never empty here (its first
+        rows are violated by the unconstrained optimum), so its exact optimum
+        always has an active row.
+
+        Polishing is only switched on once the ADMM iterate shows an active
+        row: OSQP 1.1's C polish prints "Polishing not needed - no active set
+        detected" to stdout whatever ``verbose`` says, which happened when a
+        coarse ADMM iterate had not yet identified the active row. OSQP then
+        continues from its own iterate (warm start) and polishes.
 
         Returns
         -------
@@ -335,21 +353,26 @@ class ConstrainedLeastSquares:
         lower = np.full(m, -OSQP_INFINITY)
         lower[:k] = 0.0
         solver.update(Px=P_upper, q=q, Ax=A.ravel(order="F"), l=lower)
-        self._set(p, polishing=k > 0, eps=self.coarse_eps)
         y_start = np.zeros(m)
         y_start[: y0.size] = y0
         solver.warm_start(x=x0, y=y_start)
-        iterations = 0
-        for stage in range(2):
+        iterations, status, polished = 0, "not solved", False
+        for eps in (self.coarse_eps, self.eps):
+            self._set(p, polishing=False, eps=eps)
+            result = solver.solve(raise_error=False)
+            iterations += int(result.info.iter)
+            status = str(result.info.status)
+            if status != "solved" or not _shows_active_row(rows, result.x, result.y[:k]):
+                continue
+            self._set(p, polishing=True, eps=eps)
             result = solver.solve(raise_error=False)
             iterations += int(result.info.iter)
             status = str(result.info.status)
             polished = int(result.info.status_polish) == 1
             duals = np.asarray(result.y, float)[:k]
             right_signs = not np.any(duals > self.eps * max(1.0, float(np.abs(duals).max(initial=0.0))))
-            if status == "solved" and (k == 0 or (polished and right_signs)):
+            if status == "solved" and polished and right_signs:
                 break
-            self._set(p, polishing=k > 0, eps=self.eps)
         else:
             if status == "solved":  # not exact: the caller solves the full row set instead
                 status = "solved, not polished" if not polished else "solved with wrong-sign multipliers"
