@@ -291,15 +291,16 @@ def reduce_model(
         steps.append(EliminationStep(worst, "singular", float("nan"), 0.0, float("inf")))
         active.remove(worst)
 
+    start_design = build(active) if active else None  # built once for the n_eff and OLS set-up
     n_eff = float(n)
     if effective_samples is not None:
         n_eff = float(np.clip(effective_samples, 1.0, n))
     elif autocorrelation_correction and active:
-        beta, _, _ = _ols_t_squared(build(active), y)
-        n_eff = effective_sample_count(y - build(active) @ beta, minimum=len(active) + 3.0)
+        beta, _, _ = _ols_t_squared(start_design, y)
+        n_eff = effective_sample_count(y - start_design @ beta, minimum=len(active) + 3.0)
 
     if sse_function is None:
-        ols = _OlsDowndate(build(active), y) if active else None
+        ols = _OlsDowndate(start_design, y) if active else None
 
     def partial_tests(names: list[str]) -> dict[str, tuple[float, float]]:
         p = len(names) + 1

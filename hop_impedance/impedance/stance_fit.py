@@ -301,7 +301,8 @@ def fit_joint_stance(
     tw, tauw = t[window], tau[window]
     n = int(np.count_nonzero(window))
     start = tuple(name for name in TERM_NAMES if name in options.terms)
-    full_columns = regs.moment_rows[window][:, parameter_indices(start)[1:]]
+    moment_rows = regs.moment_rows[window]  # (n, 9): every candidate model takes a column subset
+    full_columns = moment_rows[:, parameter_indices(start)[1:]]
     diagnostics = collinearity_diagnostics(full_columns, start)
     n_eff_given = _effective_samples(float(tw[-1] - tw[0]), n, options)
     if options.reduce:
@@ -339,7 +340,7 @@ def fit_joint_stance(
             **common,
         )
     columns = parameter_indices(terms)
-    X = regs.moment_rows[window][:, columns]
+    X = moment_rows[:, columns]
     A, _ = constraint_rows(regs, columns)
     solution = solver.solve(X, tauw, A)
     if not solution.converged:
