@@ -14,12 +14,15 @@ constrained fits were solved (working-set rounds, full-row fallbacks,
 rejections) and the 1-minute load average before and after.
 
     .venv/bin/python bench/bench_impedance_fit.py [--stances 300] [--rate-hz 200]
+    .venv/bin/python bench/bench_impedance_fit.py --profile 200   # cProfile, 1.87 Hz, where the time goes
 """
 
 from __future__ import annotations
 
 import argparse
+import cProfile
 import os
+import pstats
 import time
 
 import numpy as np
@@ -58,12 +61,30 @@ def time_stances(stances: list[dict], options: FitOptions, solvers: dict) -> dic
     }
 
 
+def profile(n_stances: int, options: FitOptions, rate_hz: float) -> None:
+    """cProfile of ``n_stances`` 1.87 Hz stances (three joints): the 25 largest cumulative times."""
+    rng = np.random.default_rng(0)
+    solvers = {joint: ConstrainedLeastSquares() for joint in JOINTS}
+    stances = [
+        {j: synthetic_stance(j, 1.87, rng, rate_hz=rate_hz, realistic_noise=True) for j in JOINTS}
+        for _ in range(n_stances)
+    ]
+    time_stances(stances[:5], options, solvers)
+    profiler = cProfile.Profile()
+    profiler.runcall(time_stances, stances, options, solvers)
+    pstats.Stats(profiler).sort_stats("cumulative").print_stats(25)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--stances", type=int, default=300, help="stances per frequency")
     parser.add_argument("--rate-hz", type=float, default=200.0, help="sample rate of the stance arrays (Hz)")
+    parser.add_argument("--profile", type=int, default=0, help="profile this many 1.87 Hz stances instead of timing")
     args = parser.parse_args()
     options = FitOptions(noise_bandwidth_hz=12.0)
+    if args.profile:
+        profile(args.profile, options, args.rate_hz)
+        return
     solvers = {joint: ConstrainedLeastSquares() for joint in JOINTS}
     rng = np.random.default_rng(0)
     print(f"load average (1 min) before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
