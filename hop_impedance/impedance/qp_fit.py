@@ -76,9 +76,11 @@ class QpSolution:
     n_active : int
         Constraints active at the solution (scaled slack below 1e-7).
     working_rows : int
-        Rows in the final working set; -1 when the full row set was solved.
+        Rows in the final working set; -1 when the full row set was solved,
+        0 when the unconstrained optimum was feasible (no OSQP call).
     rounds : int
-        OSQP solves on working sets (0 when only the full row set was solved).
+        OSQP solves on working sets (0 when only the full row set was solved
+        or the unconstrained optimum was feasible).
     """
 
     coefficients: np.ndarray
