@@ -15,10 +15,18 @@ Counting
   ``ambiguous_with`` (the workflow said it cannot tell them apart);
 - ``extra``: a name outside the hidden set (on nulls: a false discovery);
 - generation failures (a stance that does not take off even after re-draws)
-  are counted apart: they are not runs of the workflow.
+  are counted apart: they are not runs of the workflow;
+- on ``null``, the two-sided 95 % Clopper-Pearson interval of the false-discovery
+  rate (``scipy.stats.binomtest(extra, runs).proportion_ci()``) and the one-sided 95 % upper bound
+  (``alternative="less"``) are printed under the table.
+
+``--unique-gains`` also prints, per run, the held-out gain that each of the three late-stance look-alikes
+(rate-dependent stiffness, joint damping, push-off) still adds to a model that already holds the other two
+(:func:`unique_gains`; mean over stances and one-sided Wilcoxon p). A hidden effect that the data tell apart
+from the other two keeps a positive, significant gain there; a gain <= 0 means the other two reproduce it.
 
 Usage: .venv/bin/python bench/discovery_hit_rates.py [--seeds N] [--null-seeds N] [--hops N] [--cases a,b,...]
-       [--sizes rate_fraction=0.25,...] [--freqs 2.2]
+       [--sizes rate_fraction=0.25,...] [--freqs 2.2] [--unique-gains]
 Prints one line per run and the table (markdown) at the end.
 """
 
@@ -27,6 +35,14 @@ from __future__ import annotations
 import argparse
 import time
 
+from scipy.stats import binomtest
+
+import numpy as np
+
+from hop_impedance.discovery.identify import EFFECT_SIGNALS, SIGNALS, identify
+from hop_impedance.discovery.measurement import measure_trial
+from hop_impedance.discovery.model import ModelSpec
+from hop_impedance.discovery.selection import _one_sided_p, held_out_mse, signal_scales
 from hop_impedance.discovery.workflow import discover
 from hop_impedance.simulation.scenarios import Effects
 from hop_impedance.simulation.sensors import SensorConfig
@@ -70,6 +86,32 @@ def generate(name: str, seed: int, hops: int, sizes: EffectSizes = EffectSizes()
     return rec, freq
 
 
+#: The effects that are one late-stance bump in short stances (docs/discovery.md, ambiguity rules).
+LATE_STANCE_LOOKALIKES = ("rate_dependent_stiffness", "joint_damping", "active_push_off")
+
+
+def unique_gains(rec) -> dict[str, tuple[float, float]]:
+    """Per look-alike: (mean held-out gain, one-sided Wilcoxon p) of adding it to baseline + the other two.
+
+    Same leave-one-stance-out gain as the selection (``selection.score_candidates``, dimensionless sum of
+    MSE reductions over the effect's signals divided by their fixed scales); the other two effects'
+    nonlinear parameters (push-off timing) are fitted on all stances first.
+    """
+    trial = measure_trial(rec)
+    scale = np.array([signal_scales(trial)[sig] for sig in SIGNALS])
+    out = {}
+    for effect in LATE_STANCE_LOOKALIKES:
+        spec = ModelSpec()
+        for other in LATE_STANCE_LOOKALIKES:
+            if other != effect:
+                spec, _ = identify(spec, trial, trial.stances, other)
+        touched = np.array([sig in EFFECT_SIGNALS[effect] for sig in SIGNALS])
+        diff = (held_out_mse(spec, trial, None) - held_out_mse(spec, trial, effect)) / scale**2
+        gains = np.nan_to_num(np.where(touched, diff, 0.0)).sum(axis=1)
+        out[effect] = (float(gains.mean()), _one_sided_p(gains))
+    return out
+
+
 def classify(expected: set, doc: dict) -> dict:
     """Counting flags of one run (see module docstring)."""
     found = set(doc["effects_found"])
@@ -86,6 +128,8 @@ def main() -> None:
     ap.add_argument("--hops", type=int, default=8)
     ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--sizes", default="", help="EffectSizes overrides, e.g. rate_fraction=0.25,push_fraction=0.2")
+    ap.add_argument("--unique-gains", action="store_true",
+                    help="also print each late-stance look-alike's held-out gain over the other two")
     ap.add_argument("--freqs", default="", help="hop frequencies to cycle over (Hz), e.g. 2.2 (default: per case)")
     args = ap.parse_args()
     sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})
@@ -115,6 +159,9 @@ def main() -> None:
             print(f"{name:28s} seed {seed} f={freq} found={flags['found']} ambiguous={flags['ambiguous']} "
                   f"{'EXACT' if flags['exact'] else 'MISS' if not flags['named'] else 'NAMED+EXTRA'} "
                   f"{time.perf_counter() - t0:.1f}s", flush=True)
+            if args.unique_gains:
+                print("    unique held-out gain over the other two look-alikes: " + "; ".join(
+                    f"{e} {g:+.5f} (p {p:.3f})" for e, (g, p) in unique_gains(rec).items()), flush=True)
         rows.append((name, tally))
     print("\n| case | runs | exact | all hidden named | named or reported ambiguous | wrong extra name | generation failures |")
     print("|---|---|---|---|---|---|---|")
@@ -123,6 +170,13 @@ def main() -> None:
         pct = {k: f"{t[k]}/{t['runs']} ({100 * t[k] / n:.0f} %)" for k in ("exact", "named", "named_or_ambiguous", "extra")}
         print(f"| {name} | {t['runs']} | {pct['exact']} | {pct['named']} | {pct['named_or_ambiguous']} | {pct['extra']} "
               f"| {t['gen_fail']} |")
+    for name, t in rows:
+        if name == "null" and t["runs"]:
+            ci = binomtest(t["extra"], t["runs"]).proportion_ci(confidence_level=0.95, method="exact")
+            upper = binomtest(t["extra"], t["runs"], alternative="less").proportion_ci(0.95, "exact").high
+            print(f"\nnull: {t['extra']}/{t['runs']} false discoveries, 95 % Clopper-Pearson interval "
+                  f"[{100 * ci.low:.1f} %, {100 * ci.high:.1f} %] (two-sided), one-sided 95 % upper bound "
+                  f"{100 * upper:.1f} %")
 
 
 if __name__ == "__main__":
