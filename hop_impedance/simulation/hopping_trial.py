@@ -46,6 +46,7 @@ from hop_impedance.simulation.ground import GroundLaw
 from hop_impedance.simulation.impedance_laws import CompositeLaw, ImpedanceLaw, PushOff
 from hop_impedance.simulation.stance import (
     DEFAULT_ATOL,
+    DEFAULT_FRICTION_COEFFICIENT,
     DEFAULT_RTOL,
     StanceSimulation,
     TouchdownState,
@@ -88,6 +89,8 @@ class HoppingConfig:
         Flight before the first touchdown (s); the recording starts there.
     rtol, atol : float
         Stance integration tolerances.
+    friction_coefficient : float or None
+        Coulomb friction of the sole (stance.py docstring); None = never slides.
     """
 
     freq_hz: float
@@ -105,6 +108,7 @@ class HoppingConfig:
     lead_in_s: float = 0.4
     rtol: float = DEFAULT_RTOL
     atol: float = DEFAULT_ATOL
+    friction_coefficient: float | None = DEFAULT_FRICTION_COEFFICIENT
 
     def __post_init__(self) -> None:
         if not self.freq_hz > 0:
@@ -280,7 +284,8 @@ def simulate_resample(chain: Chain, rec: StanceRecord, t_since_td: np.ndarray) -
     """The stance of ``rec`` evaluated at other times since touchdown (dense output, no re-integration)."""
     from hop_impedance.simulation.stance import _collect, _StanceSystem
 
-    system = _StanceSystem(chain, rec.law, rec.surface, rec.touchdown)
+    system = _StanceSystem(chain, rec.law, rec.surface, rec.touchdown, rec.stance.friction_coefficient)
+    system.phases = list(rec.stance.friction_phases)
     t = np.clip(np.asarray(t_since_td, float), 0.0, rec.stance.duration_s)
     ys = rec.stance.dense(t).T
     return _collect(system, t, ys, rec.stance.end_reason, rec.stance.dense)
@@ -317,7 +322,8 @@ def calibrate(chain: Chain, config: HoppingConfig, q_td: np.ndarray, speed_guess
         law = scale_push_off(config.law, scale)
         td = touchdown_state(chain, q, np.array([0.0, -speed]), 0.0)
         st = simulate_stance(chain, law, config.surface, td, t_max_s=2.0 * period,
-                             rtol=config.rtol * 100, atol=config.atol * 100)
+                             rtol=config.rtol * 100, atol=config.atol * 100,
+                             friction_coefficient=config.friction_coefficient)
         if st.end_reason != "take_off":
             raise ValueError(f"calibration stance ended by {st.end_reason} at speed {speed:.2f} m/s")
         t_f, v_next = _next_touchdown_speed(chain, st, q)
@@ -414,7 +420,8 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
         scale *= 1.0 + rng.normal(0.0, config.push_sd)
         law = scale_push_off(config.law, scale)
         td = touchdown_state(chain, q_td, np.array([vx_com, -speed]), x_toe)
-        st = simulate_stance(chain, law, surface, td, t_max_s=2.0 * period, rtol=config.rtol, atol=config.atol)
+        st = simulate_stance(chain, law, surface, td, t_max_s=2.0 * period, rtol=config.rtol, atol=config.atol,
+                             friction_coefficient=config.friction_coefficient)
         stances.append(StanceRecord(i, t_td, st, surface, law, td))
         t_end = t_td + st.duration_s
         if st.end_reason != "take_off":
@@ -431,9 +438,6 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
         except ValueError as exc:
             stop = f"hop {i}: {exc}"
             break
-        last = i == config.n_hops - 1
-        if last:  # end at the apex, or after 40 % of the flight if it never rises
-            t_f = max(v_to[1] / g_acc, 0.4 * t_f)
         com_next = com_to + v_to * t_f - np.array([0.0, 0.5 * g_acc * t_f**2])
         v_next = v_to - np.array([0.0, g_acc * t_f])
         td_next = touchdown_state(chain, q_next, v_next, 0.0)
@@ -441,6 +445,10 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
             [0.0, t_f],
             np.array([[g_to[2:], gd_to[2:], st.gdd[-1, 2:]], [q_next, td_next.gd[2:], np.zeros(4)]]),
         )
+        if i == config.n_hops - 1:
+            # The recording ends at the apex (or after 40 % of the flight if it never rises); the segments
+            # keep the pace of a whole flight, so the last take-off looks like every other one.
+            t_f = max(v_to[1] / g_acc, 0.4 * t_f)
         flights.append(Flight(t_end, t_f, com_to, v_to, angles, g_acc))
         x_toe = float(com_next[0] - body_com(chain, np.r_[0.0, 0.0, q_next])[0])
         vx_com, speed, q_td = float(v_next[0]), float(-v_next[1]), q_next

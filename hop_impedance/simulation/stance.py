@@ -1,9 +1,25 @@
 """Forward integration of one stance phase.
 
-Model during stance: toe x held fixed (horizontal no-slip as a kinematic
-constraint; the horizontal ground force is the constraint force), toe z free
-on the surface law of :mod:`hop_impedance.simulation.ground`, segment angles
-q1..q4 free: 5 degrees of freedom plus the impedance law's extra states.
+Model during stance: toe x held fixed while the foot sticks (horizontal
+no-slip as a kinematic constraint; the horizontal ground force is the
+constraint force), toe z free on the surface law of
+:mod:`hop_impedance.simulation.ground`, segment angles q1..q4 free: 5 degrees
+of freedom plus the impedance law's extra states.
+
+Coulomb friction (``friction_coefficient`` mu, default 0.8, rubber sole on a
+plate): the foot sticks while the constraint force satisfies |Fx| <= mu Fz
+(+ ``FRICTION_TOLERANCE_N``).
+When it would need more (in the last few milliseconds before take-off, where
+Fz falls to zero while the joint springs still push), the toe slides: x
+becomes free and the ground applies Fx = sign(Fx at slip) mu Fz, opposing the
+slide. A slide that stops (toe x velocity back to zero) sticks again. Without
+this limit the horizontal force would fall from tens of newtons to zero in one
+step at take-off, a step no force plate records. ``friction_coefficient=None``
+(the default of :func:`simulate_stance`) keeps the unlimited no-slip contact;
+the hopping trials (and so the bundled recordings) use mu = 0.8. The discovery
+stance sets keep the unlimited contact: their passive stances on the soft
+surface unload slowly and with mu = 0.8 the toe slides ~3 cm and the hop does
+not take off.
 
 Integration: ``scipy.integrate.solve_ivp`` with ``LSODA`` (switches to a stiff
 method on the rigid surface), ``rtol = 1e-8``, ``atol = 1e-10`` by default,
@@ -41,6 +57,15 @@ DEFAULT_ATOL = 1e-10
 MAX_JOINT_EXCURSION_RAD = 1.5
 #: Contact that ends sooner than this after touchdown is a bounce, not a stance.
 MIN_STANCE_S = 0.02
+#: Default Coulomb friction coefficient between sole and plate (rubber on steel/aluminium: 0.6-1.0).
+DEFAULT_FRICTION_COEFFICIENT = 0.8
+#: Coordinates free while the toe slides (all six).
+SLIDE_FREE = np.ones(6, dtype=bool)
+#: Friction-cone excess tolerated before the toe slides (N): below force-plate noise; it keeps a contact
+#: that starts from zero force (lossless surface laws) from chattering between stick and slip.
+FRICTION_TOLERANCE_N = 0.5
+#: Upper bound on stick/slip alternations in one stance (chatter guard).
+MAX_FRICTION_PHASES = 20
 
 
 @dataclass(frozen=True)
@@ -77,6 +102,9 @@ class StanceSimulation:
     rho_rad, omega_rad_s : ndarray, shape (N, 3)
         Joint angles and velocities.
     law_states : ndarray, shape (N, n_states)
+    friction_phases : tuple of (t_start_s, slide_sign)
+        Stick (0) and slide (+1/-1: sign of the friction force Fx) phases.
+    friction_coefficient : float or None
     end_reason : str
         ``"take_off"``, ``"collapse"`` or ``"t_max"``.
     ref : TouchdownReference
@@ -96,6 +124,13 @@ class StanceSimulation:
     end_reason: str
     ref: TouchdownReference
     dense: object
+    friction_phases: tuple = ((0.0, 0),)
+    friction_coefficient: float | None = None
+
+    @property
+    def slid(self) -> bool:
+        """True if the toe slid at some point of the stance."""
+        return any(sign != 0 for _, sign in self.friction_phases)
 
     @property
     def duration_s(self) -> float:
@@ -104,11 +139,19 @@ class StanceSimulation:
 
 
 class _StanceSystem:
-    """ODE right-hand side and helpers for one stance (internal)."""
+    """ODE right-hand side and helpers for one stance (internal).
 
-    def __init__(self, chain: Chain, law: ImpedanceLaw, ground: GroundLaw, td: TouchdownState):
+    ODE state ``y = [x_toe, z_toe, q1..q4, xd_toe, zd_toe, qd1..qd4, law states]``;
+    ``x_toe`` only moves in sliding phases. ``phases`` lists ``(t_start, slide_sign)``
+    in time order: ``slide_sign`` 0 = sticking, +1/-1 = sliding with the ground's
+    friction force ``Fx = slide_sign mu Fz``.
+    """
+
+    def __init__(self, chain: Chain, law: ImpedanceLaw, ground: GroundLaw, td: TouchdownState,
+                 friction_coefficient: float | None = DEFAULT_FRICTION_COEFFICIENT):
         self.chain, self.law, self.ground = chain, law, ground
-        self.x_toe = float(td.g[0])
+        self.mu = friction_coefficient
+        self.phases: list[tuple[float, int]] = [(0.0, 0)]
         q0 = np.asarray(td.g[2:], float)
         # rho = D q + offset (Eq. 2), checked against joint_angles at touchdown.
         self.rho_offset = np.array([chain.alpha_rad, np.pi, np.pi])
@@ -116,26 +159,104 @@ class _StanceSystem:
             joint_angles(q0[None], chain.alpha_rad)[0], JOINT_JACOBIAN @ np.asarray(td.gd[2:], float)
         )
 
-    def unpack(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        g = np.empty(6)
-        g[0], g[1:] = self.x_toe, y[0:5]
-        gd = np.empty(6)
-        gd[0], gd[1:] = 0.0, y[5:10]
-        return g, gd, y[10:]
+    def slide_sign(self, t: float) -> int:
+        """Friction mode at time ``t`` since touchdown (the last phase started at or before ``t``)."""
+        sign = 0
+        for start, mode in self.phases:
+            if start <= t:
+                sign = mode
+        return sign
 
-    def evaluate(self, t: float, y: np.ndarray):
+    @staticmethod
+    def unpack(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return y[0:6], y[6:12], y[12:]
+
+    def evaluate(self, t: float, y: np.ndarray, sign: int | None = None):
         g, gd, s = self.unpack(y)
+        sign = self.slide_sign(t) if sign is None else sign
         rho = JOINT_JACOBIAN @ g[2:] + self.rho_offset
         omega = JOINT_JACOBIAN @ gd[2:]
         moments = self.law.moments_nm(np.float64(t), rho, omega, s, self.ref)
         fz = self.ground.force_n(g[1], gd[1])
-        gdd, constraint = accelerations(self.chain, g, gd, moments, np.array([0.0, fz]), STANCE_FREE)
+        if sign == 0:
+            gdd, constraint = accelerations(self.chain, g, gd, moments, np.array([0.0, fz]), STANCE_FREE)
+            fx = constraint[0]
+        else:
+            fx = sign * self.mu * fz
+            gdd, _ = accelerations(self.chain, g, gd, moments, np.array([fx, fz]), SLIDE_FREE)
         rates = self.law.state_rates(np.float64(t), rho, omega, s, self.ref)
-        return g, gd, gdd, np.array([constraint[0], fz]), moments, rho, omega, s, rates
+        return g, gd, gdd, np.array([fx, fz]), moments, rho, omega, s, rates
 
-    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
-        _, gd, gdd, *_, rates = self.evaluate(t, y)
-        return np.concatenate([gd[1:], gdd[1:], rates])
+    def rhs_for(self, sign: int):
+        """ODE right-hand side of one friction mode on the full state (see class docstring)."""
+        def rhs(t: float, y: np.ndarray) -> np.ndarray:
+            _, gd, gdd, *_, rates = self.evaluate(t, y, sign)
+            return np.concatenate([gd, gdd, rates])
+        return rhs
+
+
+class _PhaseState:
+    """Map between the full state and the integrated one of a phase.
+
+    While the toe sticks, ``x_toe`` and its velocity are not integrated (they
+    are the fixed contact point and 0): the solver sees exactly the 5-DOF
+    system, so with ``friction_coefficient=None`` results are identical to a
+    stance model without friction.
+    """
+
+    def __init__(self, sign: int, full_size: int, x_toe_m: float) -> None:
+        self.sign, self.x_toe_m = sign, x_toe_m
+        self.index = np.arange(full_size) if sign != 0 else np.r_[1:6, 7:full_size]
+        self.full_size = full_size
+
+    def reduce(self, y_full: np.ndarray) -> np.ndarray:
+        return y_full[self.index]
+
+    def expand(self, y: np.ndarray) -> np.ndarray:
+        """Full state(s) from integrated state(s), shape (n,) or (n, k)."""
+        if self.sign != 0:
+            return y
+        full = np.zeros((self.full_size,) + np.shape(y)[1:])
+        full[self.index] = y
+        full[0] = self.x_toe_m
+        return full
+
+    def wrap(self, fun):
+        """A function of (t, full y) as a function of (t, integrated y), keeping event attributes."""
+        def wrapped(t, y):
+            return fun(t, self.expand(y))
+        for attr in ("terminal", "direction"):
+            if hasattr(fun, attr):
+                setattr(wrapped, attr, getattr(fun, attr))
+        return wrapped
+
+    def rhs(self, full_rhs):
+        def rhs(t, y):
+            return full_rhs(t, self.expand(y))[self.index]
+        return rhs
+
+
+class _PiecewiseDense:
+    """Dense output over consecutive phases: ``dense(t) -> full y`` (columns = times), as solve_ivp's ``sol``."""
+
+    def __init__(self) -> None:
+        self.pieces: list[tuple[float, float, object, _PhaseState]] = []
+
+    def append(self, t0: float, t1: float, sol, phase: _PhaseState) -> None:
+        self.pieces.append((t0, t1, sol, phase))
+
+    def __call__(self, t):
+        t = np.asarray(t, float)
+        scalar = t.ndim == 0
+        times = np.atleast_1d(t)
+        ends = np.array([p[1] for p in self.pieces])
+        which = np.minimum(np.searchsorted(ends, times, side="left"), len(self.pieces) - 1)
+        out = np.empty((self.pieces[0][3].full_size, times.size))
+        for k in np.unique(which):
+            sel = which == k
+            _, _, sol, phase = self.pieces[k]
+            out[:, sel] = phase.expand(sol(times[sel]))
+        return out[:, 0] if scalar else out
 
 
 def simulate_stance(
@@ -149,6 +270,7 @@ def simulate_stance(
     atol: float = DEFAULT_ATOL,
     sample_times_s: np.ndarray | None = None,
     collapse_height_m: float = 0.3,
+    friction_coefficient: float | None = None,
 ) -> StanceSimulation:
     """Integrate one stance forward from a touchdown state.
 
@@ -172,6 +294,10 @@ def simulate_stance(
     collapse_height_m : float
         The stance stops with ``end_reason = "collapse"`` if the COM falls below
         this height above the toe (m).
+    friction_coefficient : float or None
+        Coulomb friction coefficient of the sole (module docstring); None (default)
+        = the toe never slides. Hopping trials use ``DEFAULT_FRICTION_COEFFICIENT``
+        (:class:`~hop_impedance.simulation.hopping_trial.HoppingConfig`).
 
     Returns
     -------
@@ -179,49 +305,77 @@ def simulate_stance(
     """
     if abs(float(touchdown.gd[0])) > 1e-9:
         raise ValueError(f"touchdown toe x velocity must be 0 under the no-slip constraint, got {touchdown.gd[0]}")
-    system = _StanceSystem(chain, law, ground, touchdown)
-    y0 = np.concatenate([touchdown.g[1:], touchdown.gd[1:], np.zeros(law.n_states)])
+    if friction_coefficient is not None and not friction_coefficient > 0:
+        raise ValueError(f"friction_coefficient must be positive (or None for no slipping), got {friction_coefficient}")
+    system = _StanceSystem(chain, law, ground, touchdown, friction_coefficient)
+    y = np.concatenate([touchdown.g, touchdown.gd, np.zeros(law.n_states)])
 
     def lift_off(t, y):  # law force reaches zero while rising
         if t < MIN_STANCE_S:
             return 1.0
-        return ground.unclipped_force_n(y[0], y[5])
+        return ground.unclipped_force_n(y[1], y[7])
 
     def leaves_surface(t, y):
-        return y[0] if t >= MIN_STANCE_S else -1.0
+        return y[1] if t >= MIN_STANCE_S else -1.0
 
     def collapse(t, y):
-        g, _, _ = system.unpack(y)
-        return body_com(chain, g)[1] - g[1] - collapse_height_m
+        return body_com(chain, y[0:6])[1] - y[1] - collapse_height_m
 
     def overflexion(t, y):  # a joint leaves the anatomical range
-        rho = JOINT_JACOBIAN @ y[1:5] + system.rho_offset
+        rho = JOINT_JACOBIAN @ y[2:6] + system.rho_offset
         return MAX_JOINT_EXCURSION_RAD - np.abs(rho - system.ref.rho0_rad).max()
 
-    lift_off.terminal, lift_off.direction = True, -1
-    leaves_surface.terminal, leaves_surface.direction = True, 1
-    collapse.terminal, collapse.direction = True, -1
-    overflexion.terminal, overflexion.direction = True, -1
-    sol = solve_ivp(
-        system.rhs, (0.0, t_max_s), y0, method="LSODA", rtol=rtol, atol=atol,
-        dense_output=True, events=(lift_off, leaves_surface, collapse, overflexion),
-    )
-    if sol.status == -1:
-        raise RuntimeError(f"stance integration failed: {sol.message}")
-    if len(sol.t_events[2]) or len(sol.t_events[3]):
-        end = "collapse"
-    elif len(sol.t_events[0]) or len(sol.t_events[1]):
-        end = "take_off"
+    def slips(t, y):  # sticking: friction cone left (|Fx| > mu Fz)
+        _, _, _, force, *_ = system.evaluate(t, y, 0)
+        return friction_coefficient * force[1] + FRICTION_TOLERANCE_N - abs(force[0])
+
+    def sticks(t, y):  # sliding: the toe stops
+        return y[6]
+
+    for event in (lift_off, leaves_surface, collapse, overflexion, slips, sticks):
+        event.terminal = True
+    lift_off.direction, leaves_surface.direction, collapse.direction = -1, 1, -1
+    overflexion.direction, slips.direction = -1, -1
+    dense = _PiecewiseDense()
+    steps = []
+    t0, sign, end = 0.0, 0, "t_max"
+    for _ in range(MAX_FRICTION_PHASES):
+        events = [lift_off, leaves_surface, collapse, overflexion]
+        if friction_coefficient is not None:
+            sticks.direction = sign  # the toe slides against the friction force: x velocity has sign -sign
+            events.append(slips if sign == 0 else sticks)
+        phase = _PhaseState(sign, y.size, float(y[0]))
+        sol = solve_ivp(phase.rhs(system.rhs_for(sign)), (t0, t_max_s), phase.reduce(y), method="LSODA",
+                        rtol=rtol, atol=atol, dense_output=True, events=[phase.wrap(e) for e in events])
+        if sol.status == -1:
+            raise RuntimeError(f"stance integration failed: {sol.message}")
+        dense.append(t0, float(sol.t[-1]), sol.sol, phase)
+        steps.append(sol.t)
+        t0, y = float(sol.t[-1]), phase.expand(sol.y[:, -1])
+        if len(sol.t_events[2]) or len(sol.t_events[3]):
+            end = "collapse"
+            break
+        if len(sol.t_events[0]) or len(sol.t_events[1]):
+            end = "take_off"
+            break
+        if sol.status != 1:  # reached t_max
+            break
+        if sign == 0:  # slips: slide against the friction force's direction
+            _, _, _, force, *_ = system.evaluate(t0, y, 0)
+            sign = 1 if force[0] > 0 else -1
+        else:  # stops sliding: stick again
+            sign, y[6] = 0, 0.0
+        system.phases.append((t0, sign))
     else:
-        end = "t_max"
-    t_end = float(sol.t[-1])
+        raise RuntimeError(f"stance integration: more than {MAX_FRICTION_PHASES} stick/slip phases")
+    t_end = t0
     if sample_times_s is None:
-        times = sol.t
+        times = np.unique(np.concatenate(steps))
     else:
         times = np.asarray(sample_times_s, float)
         times = times[(times >= 0) & (times <= t_end)]
-    ys = sol.sol(times).T if len(times) else np.zeros((0, len(y0)))
-    return _collect(system, times, ys, end, sol.sol)
+    ys = dense(times).T if len(times) else np.zeros((0, len(y)))
+    return _collect(system, times, ys, end, dense)
 
 
 def _collect(system: _StanceSystem, times: np.ndarray, ys: np.ndarray, end: str, dense) -> StanceSimulation:
@@ -233,7 +387,8 @@ def _collect(system: _StanceSystem, times: np.ndarray, ys: np.ndarray, end: str,
         g, gd, gdd, f, m, r, w, s, _ = system.evaluate(t, y)
         out["g"][i], out["gd"][i], out["gdd"][i] = g, gd, gdd
         grf[i], mom[i], rho[i], omg[i], states[i] = f, m, r, w, s
-    return StanceSimulation(times, out["g"], out["gd"], out["gdd"], grf, mom, rho, omg, states, end, system.ref, dense)
+    return StanceSimulation(times, out["g"], out["gd"], out["gdd"], grf, mom, rho, omg, states, end, system.ref, dense,
+                            tuple(system.phases), system.mu)
 
 
 def stance_energy_j(chain: Chain, law: ImpedanceLaw, ground: GroundLaw, stance: StanceSimulation) -> np.ndarray:

@@ -21,7 +21,7 @@ from hop_impedance.simulation.ground import HARD, SOFT, GroundLaw, lossless
 from hop_impedance.simulation.hopping_trial import touchdown_posture, touchdown_state
 from hop_impedance.simulation.impedance_laws import Eq3Law
 from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, SEED_SUBJECT
-from hop_impedance.simulation.stance import STANCE_FREE, simulate_stance, stance_energy_j
+from hop_impedance.simulation.stance import FRICTION_TOLERANCE_N, STANCE_FREE, simulate_stance, stance_energy_j
 
 MODEL = body_model_from_stature(SEED_SUBJECT)
 CHAIN = chain_from_body_model(MODEL)
@@ -94,7 +94,8 @@ def test_energy_is_conserved_with_elastic_joints_and_lossless_ground(ground):
     law = Eq3Law(k0=[301.4, 230.9, 175.4], k1=[948.2, 884.8, 894.8], k2=[100.0, 50.0, 20.0])
     q = touchdown_posture(CHAIN, np.array(DEFAULT_TOUCHDOWN_RHO))
     td = touchdown_state(CHAIN, q, np.array([0.05, -1.0]), 0.0)
-    st = simulate_stance(CHAIN, law, ground, td, t_max_s=0.6, sample_times_s=np.linspace(0, 0.6, 300))
+    st = simulate_stance(CHAIN, law, ground, td, t_max_s=0.6, sample_times_s=np.linspace(0, 0.6, 300),
+                         friction_coefficient=None)  # sliding friction dissipates: next test
     assert st.end_reason == "take_off"
     energy = stance_energy_j(CHAIN, law, ground, st)
     work_done = np.ptp(energy)
@@ -103,14 +104,34 @@ def test_energy_is_conserved_with_elastic_joints_and_lossless_ground(ground):
     assert law.elastic_energy_j(st.rho_rad, st.ref).max() > 10.0
 
 
+def test_sliding_friction_dissipates_exactly_its_work_and_stays_in_the_cone():
+    """Lossless ground and elastic joints: the only loss is mu Fz |x_toe velocity| while the toe slides."""
+    law = Eq3Law(k0=[301.4, 230.9, 175.4], k1=[948.2, 884.8, 894.8], k2=[100.0, 50.0, 20.0])
+    ground = lossless(HARD)
+    q = touchdown_posture(CHAIN, np.array(DEFAULT_TOUCHDOWN_RHO))
+    td = touchdown_state(CHAIN, q, np.array([0.05, -1.0]), 0.0)
+    mu = 0.8
+    st = simulate_stance(CHAIN, law, ground, td, t_max_s=0.6, friction_coefficient=mu)
+    assert st.end_reason == "take_off" and st.slid
+    t = np.linspace(0, st.duration_s, 20001)
+    fine = simulate_stance(CHAIN, law, ground, td, t_max_s=0.6, sample_times_s=t, friction_coefficient=mu)
+    fx, fz, xd = fine.grf_n[:, 0], fine.grf_n[:, 1], fine.gd[:, 0]
+    assert np.all(np.abs(fx) <= mu * fz + FRICTION_TOLERANCE_N + 1e-6)  # never outside the friction cone
+    assert np.all(fx * xd <= 1e-9)  # friction opposes the slide
+    dissipated = np.trapezoid(-fx * xd, t)
+    energy = stance_energy_j(CHAIN, law, ground, fine)
+    assert dissipated > 1e-3
+    assert energy[0] - energy[-1] == pytest.approx(dissipated, rel=1e-3)
+
+
 def test_ground_damping_dissipates_exactly_its_viscous_work():
     ground = GroundLaw("viscous", 3.1e6, 2.0, 186.3)
     law = Eq3Law(k0=[301.4, 230.9, 175.4], k1=[948.2, 884.8, 894.8])
     q = touchdown_posture(CHAIN, np.array(DEFAULT_TOUCHDOWN_RHO))
     td = touchdown_state(CHAIN, q, np.array([0.0, -1.0]), 0.0)
-    st = simulate_stance(CHAIN, law, ground, td, t_max_s=0.6)
+    st = simulate_stance(CHAIN, law, ground, td, t_max_s=0.6, friction_coefficient=None)  # no sliding loss
     t = np.linspace(0, st.duration_s, 20001)
-    fine = simulate_stance(CHAIN, law, ground, td, t_max_s=0.6, sample_times_s=t)
+    fine = simulate_stance(CHAIN, law, ground, td, t_max_s=0.6, sample_times_s=t, friction_coefficient=None)
     ydot = fine.gd[:, 1]
     dissipated = np.trapezoid(ground.damping_n_s_m * ydot**2, t)
     energy = stance_energy_j(CHAIN, law, lossless(ground), fine)
