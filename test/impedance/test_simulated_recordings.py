@@ -36,16 +36,22 @@ angles with the true moment):
   (test/biomech/test_simulated_id.py). 100 Hz markers are not the limit
   either: 1 kHz markers at the test's 20 Hz give about the same errors (hip
   at 1.87 Hz: k0 +2.4 %, k1 -4.7 % vs +2.8 %, -5.5 %).
-- The stance edges of the simulated hop hold steps that a 12-20 Hz low-pass
-  spreads over ~30 ms: Fz is 140-470 N 1 ms after touchdown (the surface
-  law's damping at the landing speed), and at the last sample before
-  take-off Fx is still 27-85 N (Fz 1-24 N) and the hip moment 5-29 N m
-  (15-46 % of its peak).
-  Noise-free, the hip's ID error is 7-29 % of its peak RMS in the last 10 %
-  of stance at 1.87 Hz against 1.3-1.4 % in the middle 80 %; at 1.53 and
-  1.87 Hz the take-off 10 % alone reproduces the hip's k error (median k0/k1
-  +12/-21 % and +3/-5 % with the ID error there only), at 2.2 Hz touchdown,
-  middle and take-off contribute comparable parts (each 1-4 % on k1).
+- The stance edges of the simulated hop: Fz is 140-470 N 1 ms after
+  touchdown (the surface law's damping at the landing speed), a step that a
+  12-20 Hz low-pass spreads over ~30 ms. Until the simulator limited friction
+  (|Fx| <= 0.8 Fz, the toe slides in the last ~3 ms; simulation/stance.py)
+  the take-off held a second step, Fx 27-85 N falling to 0 with Fz at 1-24 N,
+  and that step alone made the hip's k error at 1.53 and 1.87 Hz (+12/-21 %
+  and +3/-5 %); with friction the hip's take-off ID error fell from 7-13 % to
+  1.2-2.1 % of its peak RMS (1.87 and 2.2 Hz, stances 0-2) and the 1.87 Hz
+  hip, both 1.53/1.87 Hz noisy hips and the 2.2 Hz noisy knee now pass. The
+  last stance of a trial used to have a worse take-off still (the final
+  flight was cut at the apex with the segments hurried to the next posture);
+  it now keeps a whole flight's pace.
+  At 2.2 Hz clean, touchdown, middle and take-off contribute comparable parts
+  of the hip's remaining k1 error (each 1-4 %, ``kin`` alone +2.4 %).
+- 1.87 Hz knee clean, k0 +2.3 %: the analysis' angles alone (true moment,
+  ``kin``) give +2.1 %: the 20 Hz low-pass on the knee angle near the edges.
 - 1.53 Hz hip, first stance: the fit of the simulator's own 1 kHz samples
   gives k0 +14 %, k1 -22 % by itself (2 active constraints), because the
   simulated law's local stiffness k0 + k1 (rho - rho0) reaches -43 N m/rad
@@ -84,14 +90,11 @@ TOLERANCE = {"clean": 0.02, "noisy": 0.10}
 #: (noise, frequency, joint) -> measured worst |median error| of k0/k1 where the target is missed
 #: (re-measured with bench/id_error_budget.py; causes in the module docstring).
 MISSED_TARGETS = {
-    ("clean", 1.87, "hip"): 0.06,  # take-off edge (k0 +3 %, k1 -6 %)
-    ("clean", 2.20, "hip"): 0.09,  # take-off edge (k0 +4 %, k1 -9 %)
-    ("clean", 1.53, "hip"): 0.22,  # Eq. 7 binds on the truth itself in stance 0 + take-off edge in stance 2
-    ("noisy", 1.53, "hip"): 0.22,  # marker noise in mid-stance
-    ("noisy", 1.87, "hip"): 0.46,
-    ("noisy", 2.20, "hip"): 0.30,
-    ("noisy", 2.20, "ankle"): 0.15,  # half of it the 12 Hz low-pass (noise-free at 12 Hz: 7 %)
-    ("noisy", 2.20, "knee"): 0.11,
+    ("clean", 1.53, "hip"): 0.22,  # Eq. 7 binds on the truth itself in stance 0 (k0 +11 %, k1 -22 %)
+    ("clean", 1.87, "knee"): 0.023,  # 20 Hz low-pass of the angles (k0 +2.3 %)
+    ("clean", 2.20, "hip"): 0.06,  # touchdown, middle and take-off alike (k0 -2 %, k1 +6 %)
+    ("noisy", 2.20, "hip"): 0.24,  # marker noise in mid-stance (k0 +10 %, k1 -24 %)
+    ("noisy", 2.20, "ankle"): 0.20,  # 12 Hz low-pass (noise-free at 12 Hz: 7 %) plus marker noise (k0 +20 %, k1 -15 %)
 }
 
 
@@ -206,14 +209,22 @@ def test_end_to_end_recovery_of_k0_k1(simulated_trial, noise, joint, request):
     assert np.all(np.abs(median) <= TOLERANCE[noise]), f"{joint} {freq} Hz {noise}: median k0, k1 errors {median}"
 
 
+#: Seed Table 3: joints whose constant-model error is significantly above the variable model's (P < 0.05).
+SEED_TABLE3_SIGNIFICANT = {1.53: ("ankle", "knee", "hip"), 1.87: ("ankle",), 2.20: ("ankle", "knee")}
+
+
 @pytest.mark.slow
 def test_variable_model_beats_constant_model_end_to_end(simulated_trial):
-    """Seed Table 3 finding: variable-stiffness error below the constant-stiffness error (noisy, every joint)."""
+    """Seed Table 3 finding, noisy data: the variable-stiffness error is below the constant model's at every
+    joint, and less than half of it where the seed found the difference significant (elsewhere the noise
+    floor dominates both; measured 2.2 Hz hip: 9.7 vs 14.5)."""
+    freq = simulated_trial["freq"]
     for joint in JOINTS:
         fits = [f[joint] for f in simulated_trial["noisy"]["fits"] if f[joint].ok]
         variable = np.median([f.table3_variable for f in fits])
         constant = np.median([f.table3_constant for f in fits])
-        assert variable < 0.5 * constant, (joint, variable, constant)
+        factor = 0.5 if joint in SEED_TABLE3_SIGNIFICANT[freq] else 1.0
+        assert variable < factor * constant, (joint, variable, constant)
 
 
 BUNDLED_HARD = [RECORDINGS / f"sim_{f}hz_hard.mcap" for f in ("1p53", "1p87", "2p20")]
