@@ -178,18 +178,29 @@ def test_command_line_writes_small_recording_and_truth(tmp_path):
     assert main(["simulate", "--out", str(tmp_path / "x.mcap"), "--hops", "0"]) == 2
 
 
-def test_round_trip_inverse_dynamics_recovers_true_moments(clean_recording):
-    """Noise-free recording -> analyze_recording -> ID moments vs the simulator's true moments.
+@pytest.fixture(scope="module")
+def clean_recording_250hz():
+    from dataclasses import replace
+
+    return simulate_recording(2.2, "hard", 4, seed=1, sensors=replace(noise_free(SensorConfig()), marker_rate_hz=250.0))
+
+
+@pytest.mark.parametrize("markers", ["100 Hz", "250 Hz"])
+def test_round_trip_inverse_dynamics_recovers_true_moments(clean_recording, clean_recording_250hz, markers):
+    """Noise-free recording -> analyze_recording -> ID moments vs the simulator's true moments (issue 4: 2 %).
 
     Cut-off 20 Hz (noise-free data; the default 12 Hz is meant for noisy data).
-    Within the stance proper (10-90 % of contact) the RMS error is under 2 % of
-    each joint's peak. Over the whole contact (measured: ankle ~0.4 %, knee
-    1.3-2.0 %, hip 4-5 %) the edges dominate: touchdown on the seed's hard law starts with a force jump of
-    c |y'| (~240 N) and take-off ends the no-slip horizontal force abruptly,
-    which 100 Hz markers low-passed at 20 Hz cannot follow.
+    RMS error in % of each joint's peak, worst stance, 2.2 Hz with push-off:
+    with 250 Hz markers (the contract's highest rate) the whole contact is
+    within 2 % for every joint (measured 0.5 / 0.6 / 1.3 %); with 100 Hz
+    markers the middle 80 % is (0.3 / 0.6 / 1.8 %) and the whole contact is
+    0.5 / 0.9 / 2.05 %: the hip at touchdown, where the seed's hard law starts
+    with a force step c |y'| (~240 N) that 100 Hz markers cannot follow. (The
+    take-off used to end with a 27-85 N step of the horizontal force: 4-5 % at
+    the hip before the simulator limited friction.)
     """
     analysis = pytest.importorskip("hop_impedance.biomech.analysis")
-    rec, truth = clean_recording
+    rec, truth = clean_recording if markers == "100 Hz" else clean_recording_250hz
     result = analysis.analyze_recording(rec, analysis.AnalysisOptions(marker_cutoff_hz=20.0, force_cutoff_hz=20.0))
     good = [s for s in result.stances if s.rejection_reason is None]
     assert len(good) == len(truth["stances"])
@@ -209,7 +220,7 @@ def test_round_trip_inverse_dynamics_recovers_true_moments(clean_recording):
             return np.sqrt(np.mean((est[sel] - true[sel]) ** 2, axis=0)) / peak
 
         assert np.all(rms(ok & inner) < 0.02), rms(ok & inner)
-        assert np.all(rms(ok) < [0.02, 0.025, 0.06]), rms(ok)
+        assert np.all(rms(ok) < (0.02 if markers == "250 Hz" else [0.02, 0.02, 0.025])), rms(ok)
 
 
 @pytest.mark.parametrize("name", [n for n in Effects.names() if n != "push_off"])
