@@ -60,9 +60,17 @@ def print_report(report, recording: str) -> int:
     for line in loss_lines(report, counts):
         print(line)
     est = "/impedance_estimator"
-    print(f"fit p50/p99: {report.diag(est, 'fit_p50_ms', '?')}/{report.diag(est, 'fit_p99_ms', '?')} ms; "
-          f"take-off to profile p50/p99: {report.diag(est, 'takeoff_to_profile_p50_ms', '?')}/"
-          f"{report.diag(est, 'takeoff_to_profile_p99_ms', '?')} ms")
+
+    def ms(key: str) -> str:
+        """A millisecond diagnostic (a string on /diagnostics) to one decimal, '?' when missing."""
+        value = report.diag(est, key, "?")
+        try:
+            return f"{float(value):.1f}"
+        except ValueError:
+            return value
+
+    print(f"fit p50/p99: {ms('fit_p50_ms')}/{ms('fit_p99_ms')} ms; "
+          f"take-off to profile p50/p99: {ms('takeoff_to_profile_p50_ms')}/{ms('takeoff_to_profile_p99_ms')} ms")
     print(f"output: {report.output_mcap}  ({report.wall_s:.1f} s wall)")
     if getattr(report, "rrd", None):
         print(f"Rerun recording: {report.rrd}  (open it with: .venv/bin/rerun {report.rrd})")
