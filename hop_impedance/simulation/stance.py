@@ -225,7 +225,7 @@ class _PhaseState:
         """A function of (t, full y) as a function of (t, integrated y), keeping event attributes."""
         def wrapped(t, y):
             return fun(t, self.expand(y))
-        for attr in ("terminal", "direction"):
+        for attr in ("terminal", "direction", "__name__"):
             if hasattr(fun, attr):
                 setattr(wrapped, attr, getattr(fun, attr))
         return wrapped
@@ -345,8 +345,8 @@ def simulate_stance(
             sticks.direction = sign  # the toe slides against the friction force: x velocity has sign -sign
             events.append(slips if sign == 0 else sticks)
         phase = _PhaseState(sign, y.size, float(y[0]))
-        sol = solve_ivp(phase.rhs(system.rhs_for(sign)), (t0, t_max_s), phase.reduce(y), method="LSODA",
-                        rtol=rtol, atol=atol, dense_output=True, events=[phase.wrap(e) for e in events])
+        sol = _integrate_phase(phase.rhs(system.rhs_for(sign)), (t0, t_max_s), phase.reduce(y),
+                               [phase.wrap(e) for e in events], rtol, atol)
         if sol.status == -1:
             raise RuntimeError(f"stance integration failed: {sol.message}")
         dense.append(t0, float(sol.t[-1]), sol.sol, phase)
@@ -376,6 +376,25 @@ def simulate_stance(
         times = times[(times >= 0) & (times <= t_end)]
     ys = dense(times).T if len(times) else np.zeros((0, len(y)))
     return _collect(system, times, ys, end, dense)
+
+
+def _integrate_phase(rhs, span: tuple[float, float], y0: np.ndarray, events: list, rtol: float, atol: float):
+    """``solve_ivp`` with LSODA; Radau if LSODA's event location fails.
+
+    LSODA can return a zero-length step on which scipy's event root finder
+    sees the same value at both ends and raises "f(a) and f(b) must have
+    different signs" (met when a joint runs into the collapse limit under a
+    badly identified law). That phase is then integrated with the implicit
+    Radau method; if that fails too, a RuntimeError says why.
+    """
+    try:
+        return solve_ivp(rhs, span, y0, method="LSODA", rtol=rtol, atol=atol, dense_output=True, events=events)
+    except ValueError as lsoda_error:
+        try:
+            return solve_ivp(rhs, span, y0, method="Radau", rtol=rtol, atol=atol, dense_output=True, events=events)
+        except ValueError as radau_error:
+            raise RuntimeError(f"stance integration failed: event location ({lsoda_error}; "
+                               f"Radau: {radau_error})") from radau_error
 
 
 def _collect(system: _StanceSystem, times: np.ndarray, ys: np.ndarray, end: str, dense) -> StanceSimulation:
