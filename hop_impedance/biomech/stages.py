@@ -34,7 +34,7 @@ all at the end of the stance: the plate offset of the following flight is
 the mean of its first ``post_pad_s - flight_margin_s`` only, and the
 zero-lag filters and splines see the window edge ``post_pad_s`` after
 take-off (filter time constant ~13 ms at 12 Hz). The test
-``test/ros/test_stages_low_latency.py`` measures the difference on the
+``test/biomech/test_stages_low_latency.py`` measures the difference on the
 bundled recordings (figures in docs/pipeline.md).
 
 Message loss
