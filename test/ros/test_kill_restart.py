@@ -8,10 +8,11 @@ children started like ``hop-impedance pipeline --processes``; this process colle
 What is asserted, with ``t_up`` the wall time at which the restarted node's reader (a new
 endpoint GID; the killed one lingers until its DDS lease expires) is visible in the graph and,
 for inverse_dynamics, its first progress report with input data received (the replay matches
-new readers only after DDS discovery, measured up to several seconds under load) and a 1.5 s margin for its readers to match the publishers (with 0.5 s, a fresh-clone CI run on the
-loaded machine missed the first stance after an estimator restart: discovery was still under way):
+new readers only after DDS discovery, measured up to several seconds under load) and a 3 s margin for its readers to match the publishers (with 0.5 s, and again with 1.5 s in a later
+fresh-clone CI run, the first stances after an estimator restart were missed: discovery between
+the new process and inverse_dynamics was still under way):
 
-- every stance whose touchdown event arrives after ``t_up + 1.5 s`` gets exactly one summary
+- every stance whose touchdown event arrives after ``t_up + 3 s`` gets exactly one summary
   (accepted, or with a rejection reason) and three profiles, matched by touchdown stamp;
 - the first summary published by the restarted node is that of the first such stance or an
   earlier one (it resumes with the next stance, no later);
@@ -37,7 +38,7 @@ from hop_impedance.nodes.common import PROGRESS_TOPIC  # noqa: E402
 from hop_impedance_msgs.msg import ImpedanceProfile, Progress, StanceEvent, StanceSummary  # noqa: E402
 
 REC = "recordings/sim_2p20hz_hard.mcap"
-MARGIN_S = 1.5
+MARGIN_S = 3.0
 # the topic whose subscription shows that the restarted node is up (only that node subscribes it here)
 WATCH = {"impedance_estimator": STANCE_KINETICS_TOPIC, "inverse_dynamics": MARKER_TOPIC}
 
