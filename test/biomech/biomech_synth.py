@@ -186,3 +186,17 @@ def hopping_recording(
         source="synthetic hopping",
     )
     return rec, events
+
+
+def push_in_chunks(stage, data, edges_s: np.ndarray):
+    """Feed ``data`` (a SpanData) to a StanceAnalysisStage between consecutive ``edges_s`` (s).
+
+    Yields ``(chunk end s, stances the chunk completed)`` per chunk, as a live
+    node would see them; the caller flushes the stage at the end.
+    """
+    fi, mi = np.searchsorted(data.force_t_s, edges_s), np.searchsorted(data.marker_t_s, edges_s)
+    for i in range(len(edges_s) - 1):
+        yield edges_s[i + 1], stage.push(
+            (data.force_t_s[fi[i] : fi[i + 1]], data.wrench[fi[i] : fi[i + 1]]),
+            (data.marker_t_s[mi[i] : mi[i + 1]], data.markers_xz[mi[i] : mi[i + 1]]),
+        )

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from biomech_synth import hopping_recording
+from biomech_synth import hopping_recording, push_in_chunks
 
 from hop_impedance.biomech.analysis import AnalysisOptions, analysis_to_json, analyze_recording, recording_span
 from hop_impedance.biomech.stages import StanceAnalysisStage
@@ -58,16 +58,11 @@ def test_streaming_stage_matches_batch():
     batch = analyze_recording(rec)
     data = recording_span(rec)
     stage = StanceAnalysisStage(batch.model, rec.subject.body_mass_kg)
-    edges = np.arange(0, 4.5, 0.037)
-    fi, mi = np.searchsorted(data.force_t_s, edges), np.searchsorted(data.marker_t_s, edges)
     out = []
-    for i in range(edges.size - 1):
-        out += stage.push(
-            (data.force_t_s[fi[i] : fi[i + 1]], data.wrench[fi[i] : fi[i + 1]]),
-            (data.marker_t_s[mi[i] : mi[i + 1]], data.markers_xz[mi[i] : mi[i + 1]]),
-        )
+    for chunk_end_s, emitted in push_in_chunks(stage, data, np.arange(0, 4.5, 0.037)):
+        out += emitted
         if out:  # stances come out during the stream, not only at the end
-            assert out[-1].takeoff_s < edges[i + 1]
+            assert out[-1].takeoff_s < chunk_end_s
     out += stage.flush()
     assert [(s.touchdown_s, s.takeoff_s, s.complete) for s in out] == [
         (s.touchdown_s, s.takeoff_s, s.complete) for s in batch.stances

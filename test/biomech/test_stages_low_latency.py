@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from biomech_synth import push_in_chunks
 
 from hop_impedance.biomech.analysis import analyze_recording, recording_span
 from hop_impedance.biomech.stages import StanceAnalysisStage
@@ -30,13 +31,7 @@ POST_PAD_S = 0.05
 def _stream(stage: StanceAnalysisStage, data, chunk_s: float = 0.02) -> list:
     """Push ``data`` (a SpanData) through ``stage`` in chunks of ``chunk_s`` and flush."""
     edges = np.arange(data.force_t_s[0], data.force_t_s[-1] + chunk_s, chunk_s)
-    fi, mi = np.searchsorted(data.force_t_s, edges), np.searchsorted(data.marker_t_s, edges)
-    out = []
-    for i in range(edges.size - 1):
-        out += stage.push(
-            (data.force_t_s[fi[i] : fi[i + 1]], data.wrench[fi[i] : fi[i + 1]]),
-            (data.marker_t_s[mi[i] : mi[i + 1]], data.markers_xz[mi[i] : mi[i + 1]]),
-        )
+    out = [stance for _, emitted in push_in_chunks(stage, data, edges) for stance in emitted]
     return out + stage.flush()
 
 
