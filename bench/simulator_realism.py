@@ -78,6 +78,7 @@ def measure(freq_hz: float, hops: int = 6, seed: int = 1) -> dict:
         st = rec.stance
         hip_z = joint_positions(chain, st.g)[:, 3, 1]
         k_leg, peak, comp = leg_stiffness_n_m(chain, st)
+        brake, push = brake_and_push_j(st)
         rows.append({
             "stance_ms": 1000 * st.duration_s,
             "grf_bw": peak / weight,
@@ -86,8 +87,8 @@ def measure(freq_hz: float, hops: int = 6, seed: int = 1) -> dict:
             "rom": st.rho_rad.max(axis=0) - st.rho_rad[0],
             "mmax": st.moments_nm.max(axis=0),
             "k_leg": k_leg,
-            "brake_j": brake_and_push_j(st)[0],
-            "push_j": brake_and_push_j(st)[1],
+            "brake_j": brake,
+            "push_j": push,
             "moment_integral_nm_s": np.trapezoid(st.moments_nm, st.t_s, axis=0),
         })
     t = np.arange(trial.stances[1].t_touchdown_s, trial.stances[-1].t_touchdown_s, 0.001)

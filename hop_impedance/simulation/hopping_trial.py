@@ -50,6 +50,7 @@ from hop_impedance.simulation.stance import (
     DEFAULT_RTOL,
     StanceSimulation,
     TouchdownState,
+    resample_stance,
     simulate_stance,
 )
 
@@ -282,13 +283,7 @@ class HoppingTrial:
 
 def simulate_resample(chain: Chain, rec: StanceRecord, t_since_td: np.ndarray) -> StanceSimulation:
     """The stance of ``rec`` evaluated at other times since touchdown (dense output, no re-integration)."""
-    from hop_impedance.simulation.stance import _collect, _StanceSystem
-
-    system = _StanceSystem(chain, rec.law, rec.surface, rec.touchdown, rec.stance.friction_coefficient)
-    system.phases = list(rec.stance.friction_phases)
-    t = np.clip(np.asarray(t_since_td, float), 0.0, rec.stance.duration_s)
-    ys = rec.stance.dense(t).T
-    return _collect(system, t, ys, rec.stance.end_reason, rec.stance.dense)
+    return resample_stance(chain, rec.law, rec.surface, rec.touchdown, rec.stance, t_since_td)
 
 
 def _next_touchdown_speed(chain: Chain, stance: StanceSimulation, q_next: np.ndarray) -> tuple[float, float]:

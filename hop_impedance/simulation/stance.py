@@ -6,8 +6,8 @@ constraint force), toe z free on the surface law of
 :mod:`hop_impedance.simulation.ground`, segment angles q1..q4 free: 5 degrees
 of freedom plus the impedance law's extra states.
 
-Coulomb friction (``friction_coefficient`` mu, default 0.8, rubber sole on a
-plate): the foot sticks while the constraint force satisfies |Fx| <= mu Fz
+Coulomb friction (``friction_coefficient`` mu; the hopping trials use
+``DEFAULT_FRICTION_COEFFICIENT`` = 0.8, rubber sole on a plate): the foot sticks while the constraint force satisfies |Fx| <= mu Fz
 (+ ``FRICTION_TOLERANCE_N``).
 When it would need more (in the last few milliseconds before take-off, where
 Fz falls to zero while the joint springs still push), the toe slides: x
@@ -148,10 +148,10 @@ class _StanceSystem:
     """
 
     def __init__(self, chain: Chain, law: ImpedanceLaw, ground: GroundLaw, td: TouchdownState,
-                 friction_coefficient: float | None = DEFAULT_FRICTION_COEFFICIENT):
+                 friction_coefficient: float | None, phases: tuple = ((0.0, 0),)):
         self.chain, self.law, self.ground = chain, law, ground
         self.mu = friction_coefficient
-        self.phases: list[tuple[float, int]] = [(0.0, 0)]
+        self.phases: list[tuple[float, int]] = list(phases)
         q0 = np.asarray(td.g[2:], float)
         # rho = D q + offset (Eq. 2), checked against joint_angles at touchdown.
         self.rho_offset = np.array([chain.alpha_rad, np.pi, np.pi])
@@ -240,21 +240,21 @@ class _PiecewiseDense:
     """Dense output over consecutive phases: ``dense(t) -> full y`` (columns = times), as solve_ivp's ``sol``."""
 
     def __init__(self) -> None:
-        self.pieces: list[tuple[float, float, object, _PhaseState]] = []
+        self.pieces: list[tuple[float, object, _PhaseState]] = []  # (phase end s, solve_ivp sol, phase)
 
-    def append(self, t0: float, t1: float, sol, phase: _PhaseState) -> None:
-        self.pieces.append((t0, t1, sol, phase))
+    def append(self, t_end_s: float, sol, phase: _PhaseState) -> None:
+        self.pieces.append((t_end_s, sol, phase))
 
     def __call__(self, t):
         t = np.asarray(t, float)
         scalar = t.ndim == 0
         times = np.atleast_1d(t)
-        ends = np.array([p[1] for p in self.pieces])
+        ends = np.array([p[0] for p in self.pieces])
         which = np.minimum(np.searchsorted(ends, times, side="left"), len(self.pieces) - 1)
-        out = np.empty((self.pieces[0][3].full_size, times.size))
+        out = np.empty((self.pieces[0][2].full_size, times.size))
         for k in np.unique(which):
             sel = which == k
-            _, _, sol, phase = self.pieces[k]
+            _, sol, phase = self.pieces[k]
             out[:, sel] = phase.expand(sol(times[sel]))
         return out[:, 0] if scalar else out
 
@@ -349,7 +349,7 @@ def simulate_stance(
                                [phase.wrap(e) for e in events], rtol, atol)
         if sol.status == -1:
             raise RuntimeError(f"stance integration failed: {sol.message}")
-        dense.append(t0, float(sol.t[-1]), sol.sol, phase)
+        dense.append(float(sol.t[-1]), sol.sol, phase)
         steps.append(sol.t)
         t0, y = float(sol.t[-1]), phase.expand(sol.y[:, -1])
         if len(sol.t_events[2]) or len(sol.t_events[3]):
@@ -395,6 +395,15 @@ def _integrate_phase(rhs, span: tuple[float, float], y0: np.ndarray, events: lis
         except ValueError as radau_error:
             raise RuntimeError(f"stance integration failed: event location ({lsoda_error}; "
                                f"Radau: {radau_error})") from radau_error
+
+
+def resample_stance(chain: Chain, law: ImpedanceLaw, ground: GroundLaw, touchdown: TouchdownState,
+                    stance: StanceSimulation, t_since_td: np.ndarray) -> StanceSimulation:
+    """``stance`` (integrated by :func:`simulate_stance` with these inputs) at other times since
+    touchdown (s), from its dense output without re-integration; times are clipped to the stance."""
+    system = _StanceSystem(chain, law, ground, touchdown, stance.friction_coefficient, stance.friction_phases)
+    t = np.clip(np.asarray(t_since_td, float), 0.0, stance.duration_s)
+    return _collect(system, t, stance.dense(t).T, stance.end_reason, stance.dense)
 
 
 def _collect(system: _StanceSystem, times: np.ndarray, ys: np.ndarray, end: str, dense) -> StanceSimulation:
