@@ -46,19 +46,17 @@ def constraint_rows(regressors: StanceRegressors, columns: np.ndarray) -> tuple[
     family : ndarray of int, shape (m,)
         Index into :data:`CONSTRAINT_FAMILIES` of each row.
     """
-    blocks = (
-        regressors.stiffness_rows,
-        regressors.damping_rows,
-        regressors.spring_energy_rows,
-        regressors.damper_power_rows,
+    blocks = np.concatenate(
+        (
+            regressors.stiffness_rows[:, columns],
+            regressors.damping_rows[:, columns],
+            regressors.spring_energy_columns(columns),
+            regressors.damper_power_rows[:, columns],
+        )
     )
-    rows, family = [], []
-    for index, block in enumerate(blocks):
-        sub = block[:, columns]
-        keep = np.any(sub != 0.0, axis=1)
-        rows.append(sub[keep])
-        family.append(np.full(int(keep.sum()), index, dtype=int))
-    return np.vstack(rows), np.concatenate(family)
+    keep = np.any(blocks != 0.0, axis=1)
+    family = np.repeat(np.arange(len(CONSTRAINT_FAMILIES)), regressors.n_samples)
+    return blocks[keep], family[keep]
 
 
 def constraint_violations(

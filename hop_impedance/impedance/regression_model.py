@@ -38,6 +38,7 @@ no second derivative of the angle.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.integrate import cumulative_simpson
@@ -79,7 +80,9 @@ class StanceRegressors:
     stiffness_rows, damping_rows : ndarray, shape (N, 9)
         K (N m/rad) and B (N m s/rad), Eq. 3.
     spring_energy_rows : ndarray, shape (N, 9)
-        E_s = int M_s d(rho) (J) since touchdown, Eq. 8.
+        E_s = int M_s d(rho) (J) since touchdown, Eq. 8. A cached property:
+        its k3 column is a second numerical integral, computed only when
+        used (:meth:`spring_energy_columns` gives a column subset without it).
     damper_power_rows : ndarray, shape (N, 9)
         M_d * omega (W) = -P_d, Eq. 9 (the constraint is M_d * omega >= 0).
     """
@@ -95,13 +98,50 @@ class StanceRegressors:
     damper_moment_rows: np.ndarray
     stiffness_rows: np.ndarray
     damping_rows: np.ndarray
-    spring_energy_rows: np.ndarray
     damper_power_rows: np.ndarray
 
     @property
     def n_samples(self) -> int:
         """Number of samples N in the stance."""
         return int(self.time_s.shape[0])
+
+    @cached_property
+    def spring_energy_rows(self) -> np.ndarray:
+        """E_s = int M_s d(rho) (J) since touchdown, Eq. 8, shape (N, 9) (computed on first use)."""
+        rows = self._spring_energy_polynomial.copy()
+        rows[:, _K3_COLUMN] = self._spring_energy_k3
+        return rows
+
+    def spring_energy_columns(self, columns: np.ndarray) -> np.ndarray:
+        """``spring_energy_rows[:, columns]`` (J per coefficient unit), shape (N, p).
+
+        The k3 column is the only one that needs an integral (a second
+        Simpson integral, ``int (int w omega dt) omega dt``); it is computed,
+        once, only when ``columns`` contains k3.
+        """
+        columns = np.asarray(columns, dtype=int)
+        sub = self._spring_energy_polynomial[:, columns]
+        is_k3 = columns == _K3_COLUMN
+        if is_k3.any():
+            sub[:, is_k3] = self._spring_energy_k3[:, None]
+        return sub
+
+    @cached_property
+    def _spring_energy_polynomial(self) -> np.ndarray:
+        """:attr:`spring_energy_rows` with the k3 column left 0: the closed-form columns, shape (N, 9)."""
+        d = self.delta_angle_rad
+        rows = np.zeros((d.size, len(PARAMETER_NAMES)))
+        rows[:, :4] = np.stack([d, d**2 / 2, d**3 / 6, d**4 / 12], axis=1)
+        return rows
+
+    @cached_property
+    def _spring_energy_k3(self) -> np.ndarray:
+        """k3 column of :attr:`spring_energy_rows`, ``int (int w omega dt) omega dt`` (J per N m s/rad^2), shape (N,)."""
+        return cumulative_integral(self.moment_rows[:, _K3_COLUMN] * self.angular_velocity_rad_s, self.time_s)
+
+
+#: Column of k3 in :data:`PARAMETER_NAMES` (the only spring-energy column needing an integral).
+_K3_COLUMN = PARAMETER_NAMES.index("k3")
 
 
 def cumulative_integral(values: np.ndarray, time_s: np.ndarray) -> np.ndarray:
@@ -159,32 +199,22 @@ def stance_regressors(
     n = t.shape[0]
     d = rho - rho[0]
     w = omega - omega[0]
-    ones, zeros = np.ones(n), np.zeros(n)
 
     int_w_drho = cumulative_integral(w * omega, t)  # int (omega - omega0) d(rho)
     int_d_domega = d * w - int_w_drho  # by parts, d(t0) = 0
 
-    spring = np.column_stack(
-        [ones, d, d**2 / 2, d**3 / 3, int_w_drho, zeros, zeros, zeros, zeros]
+    # M = M_s + M_d: the spring (columns 0-4) and damper (5-8) parts have
+    # disjoint columns, so each is the moment rows with the other part zeroed.
+    moment = np.stack(
+        [np.ones(n), d, d**2 / 2, d**3 / 3, int_w_drho, omega, w**2 / 2, w**3 / 3, int_d_domega], axis=1
     )
-    damper = np.column_stack(
-        [zeros, zeros, zeros, zeros, zeros, omega, w**2 / 2, w**3 / 3, int_d_domega]
-    )
-    stiffness = np.column_stack([zeros, ones, d, d**2, w, zeros, zeros, zeros, zeros])
-    damping = np.column_stack([zeros, zeros, zeros, zeros, zeros, ones, w, w**2, d])
-    energy = np.column_stack(
-        [
-            d,
-            d**2 / 2,
-            d**3 / 6,
-            d**4 / 12,
-            cumulative_integral(int_w_drho * omega, t),
-            zeros,
-            zeros,
-            zeros,
-            zeros,
-        ]
-    )
+    spring, damper = moment.copy(), moment.copy()
+    spring[:, 5:] = 0.0
+    damper[:, :5] = 0.0
+    stiffness = np.zeros((n, 9))
+    stiffness[:, 1:5] = np.stack([np.ones(n), d, d**2, w], axis=1)
+    damping = np.zeros((n, 9))
+    damping[:, 5:] = np.stack([np.ones(n), w, w**2, d], axis=1)
     return StanceRegressors(
         time_s=t,
         delta_angle_rad=d,
@@ -192,12 +222,11 @@ def stance_regressors(
         angular_velocity_rad_s=omega,
         rho0_rad=float(rho[0]),
         omega0_rad_s=float(omega[0]),
-        moment_rows=spring + damper,
+        moment_rows=moment,
         spring_moment_rows=spring,
         damper_moment_rows=damper,
         stiffness_rows=stiffness,
         damping_rows=damping,
-        spring_energy_rows=energy,
         damper_power_rows=damper * omega[:, None],
     )
 

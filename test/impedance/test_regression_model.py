@@ -45,6 +45,19 @@ class TestStanceRegressors:
         # Simpson is exact to cubics; the integrand here is quartic (error O(h^4))
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-6 * want.max())
 
+    def test_spring_energy_columns_equal_the_full_rows_and_the_closed_form(self):
+        # the column-subset path computes the k3 integral itself (fresh regressors)
+        r = self.regs()
+        with_k3 = parameter_indices(("k0", "k3", "b0"))
+        got = r.spring_energy_columns(with_k3)
+        want_k3 = 8 * self.a**3 * self.t**5 / 15
+        np.testing.assert_allclose(got[:, 2], want_k3, rtol=0, atol=1e-6 * want_k3.max())
+        np.testing.assert_allclose(got[:, 1], self.a**2 * self.t**4 / 2)  # d**2 / 2
+        np.testing.assert_array_equal(got[:, 3], 0.0)  # b0 stores no spring energy
+        for terms in (("k0", "k1", "b0"), ("k0", "k1", "k2", "k3", "b3")):
+            columns = parameter_indices(terms)
+            np.testing.assert_array_equal(r.spring_energy_columns(columns), r.spring_energy_rows[:, columns])
+
     def test_polynomial_columns(self):
         r = self.regs()
         d = self.a * self.t**2
