@@ -6,12 +6,14 @@ Two sources of truth:
    noise-free joint samples with the push-off removed (``eq3_moments_nm``)
    must give back the Eq. 3 coefficients (the fit alone, 2 %).
 2. Recordings generated here (seeded, ``tmp_path``) *without push-off* on the
-   hard surface at the seed's three frequencies, one trial each sampled twice:
-   noise-free and with realistic noise (1 mm markers, 2 N force, 0.5 N m
-   torque). They go through the MCAP writer and loader, ``analyze_recording``
-   (stances, filtering, kinematics, inverse dynamics from markers and forces)
-   and ``fit_recording``. The simulator integrates the law as ODE states,
-   independently of our regressors, so agreement is a real check.
+   hard surface at the seed's three frequencies, four independent trials
+   (seeds 11-14, 4 hops each) per frequency, each sampled twice: noise-free
+   and with realistic noise (1 mm markers, 2 N force, 0.5 N m torque). They
+   go through the MCAP writer and loader, ``analyze_recording`` (stances,
+   filtering, kinematics, inverse dynamics from markers and forces) and
+   ``fit_recording`` (:mod:`hop_impedance.validation.coefficient_recovery`).
+   The simulator integrates the law as ODE states, independently of our
+   regressors, so agreement is a real check.
 
 Choices (see docs/impedance_model.md, "Recordings"): noise-free recordings
 are analysed at a 20 Hz cut-off (nothing to remove; 12 Hz biases the ankle
@@ -20,9 +22,17 @@ each stance edge out of the objective (filter edge artefact at take-off, up
 to 12 N m); the structure k0, k1, b0 of the simulated law is given
 (``reduce=False``) because term selection is tested elsewhere and the
 question here is the value of the coefficients. The figure compared is the
-median over the stances of a trial (4 hops) of the relative error of k0 and
-k1; b0 = 0.5 N m s/rad contributes under 1 % of the moment and is not
-compared. Combinations that miss the brief's target (2 % noise-free, 10 %
+median, over the pooled stances of the four trials (13-16 per frequency), of
+the relative error of k0 and k1; b0 = 0.5 N m s/rad contributes under 1 % of
+the moment and is not compared. Why pooled: a push-off-free trial loses
+energy and stops after 3-4 stances, and with realistic noise one stance's
+error scatters by SD 4-22 % (k0) and 4-62 % (k1) (``bench/recovery_errors.py``),
+so the median of one trial's 3 stances measured mostly which noise draw the
+seed gave (2.2 Hz ankle: trial medians k0 +3 to +20 %), not the method's
+bias; the seed paper itself averaged about 30 hops per trial. Stances where
+the simulated law's own K or B goes below zero (seed Eq. 7 forbids it; the
+1.53 Hz hip, 5 of 13 stances) are counted and not compared: no constrained
+fit can return those coefficients. Combinations that miss the brief's target (2 % noise-free, 10 %
 noisy) are marked ``xfail(strict=True)`` with the measured error and fail
 loudly the day they pass.
 
@@ -50,13 +60,17 @@ angles with the true moment):
   it now keeps a whole flight's pace.
   At 2.2 Hz clean, touchdown, middle and take-off contribute comparable parts
   of the hip's remaining k1 error (each 1-4 %, ``kin`` alone +2.4 %).
-- 1.87 Hz knee clean, k0 +2.3 %: the analysis' angles alone (true moment,
-  ``kin``) give +2.1 %: the 20 Hz low-pass on the knee angle near the edges.
-- 1.53 Hz hip, first stance: the fit of the simulator's own 1 kHz samples
-  gives k0 +14 %, k1 -22 % by itself (2 active constraints), because the
-  simulated law's local stiffness k0 + k1 (rho - rho0) reaches -43 N m/rad
-  when the hip extends past its touchdown angle, where the seed's constraint
-  K >= 0 (Eq. 7) forbids it. With 3 usable stances this sets the median.
+- 1.87 and 2.2 Hz knee clean, k0 +2.1 and +2.3 %: the analysis' angles
+  alone (true moment, ``kin``) give +2.1 % at 1.87 Hz: the 20 Hz low-pass on
+  the knee angle near the edges.
+- 1.53 Hz hip: the simulated hip extends far past its touchdown angle
+  (0.9 rad in seed 11's first stance, where the law's K reaches -46 N m/rad;
+  those stances are not compared, see above). On the feasible stances the
+  error is the take-off: the law still holds the hip at -29 N m (46 % of its
+  peak) when the force has fallen to zero, so the segments accelerate
+  sharply in the last ~10 ms, and the 20 Hz kinematics cannot follow (seed
+  11, stance 2: ID hip moment swings from -23 to +24 N m over the last 8 ms
+  while the true one stays at -29 N m; ``to`` alone +12/-34 %).
 - Realistic noise: at 2.2 Hz half of the ankle and knee error is the 12 Hz
   low-pass itself (noise-free at 12 Hz: ankle +7 %, knee +6 % on k0), the
   rest is marker noise (1 mm); the hip's error comes from the middle of
@@ -68,7 +82,6 @@ angles with the true moment):
 from __future__ import annotations
 
 import json
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -81,20 +94,23 @@ RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"
 TRUTH_FILES = sorted(RECORDINGS.glob("*.truth.json"))
 JOINTS = ("ankle", "knee", "hip")
 FREQUENCIES_HZ = (1.53, 1.87, 2.20)
-SEED = 11
+#: Independent trials per frequency (hop-to-hop variability and sensor noise seeds), pooled.
+SEEDS = (11, 12, 13, 14)
 N_HOPS = 4
 EDGE_S = 0.010
 CUTOFF_HZ = {"clean": 20.0, "noisy": 12.0}
 TOLERANCE = {"clean": 0.02, "noisy": 0.10}
 
 #: (noise, frequency, joint) -> measured worst |median error| of k0/k1 where the target is missed
-#: (re-measured with bench/id_error_budget.py; causes in the module docstring).
+#: (``bench/recovery_errors.py``, 2026-11-21; causes in the module docstring).
 MISSED_TARGETS = {
-    ("clean", 1.53, "hip"): 0.22,  # Eq. 7 binds on the truth itself in stance 0 (k0 +11 %, k1 -22 %)
-    ("clean", 1.87, "knee"): 0.023,  # 20 Hz low-pass of the angles (k0 +2.3 %)
-    ("clean", 2.20, "hip"): 0.06,  # touchdown, middle and take-off alike (k0 -2 %, k1 +6 %)
-    ("noisy", 2.20, "hip"): 0.24,  # marker noise in mid-stance (k0 +10 %, k1 -24 %)
-    ("noisy", 2.20, "ankle"): 0.20,  # 12 Hz low-pass (noise-free at 12 Hz: 7 %) plus marker noise (k0 +20 %, k1 -15 %)
+    ("clean", 1.53, "hip"): 0.12,  # take-off transient (k0 +5 %, k1 -12 %); 5 of 13 stances infeasible
+    ("clean", 1.87, "knee"): 0.021,  # 20 Hz low-pass of the angles (k0 +2.1 %)
+    ("clean", 2.20, "knee"): 0.023,  # 20 Hz low-pass of the angles (k0 +2.3 %, k1 -2.1 %)
+    ("clean", 2.20, "hip"): 0.047,  # touchdown, middle and take-off alike (k0 -1.5 %, k1 +4.7 %)
+    ("noisy", 1.53, "hip"): 0.12,  # take-off transient as noise-free, plus noise (k0 +4 %, k1 -12 %)
+    ("noisy", 2.20, "ankle"): 0.11,  # 12 Hz low-pass (noise-free at 12 Hz: +7 %) plus noise (k0 +11 %, k1 -7 %)
+    ("noisy", 2.20, "hip"): 0.19,  # marker noise in mid-stance (k0 +8 %, k1 -19 %; per-stance SD of k1 62 %)
 }
 
 
@@ -133,57 +149,18 @@ def test_truth_samples_without_push_off_recover_the_coefficients(truth_path):
 
 @pytest.fixture(scope="module", params=FREQUENCIES_HZ, ids=lambda f: f"{f:.2f}Hz")
 def simulated_trial(request, tmp_path_factory):
-    """One push-off-free hard-surface trial written noise-free and noisy as MCAP + truth, analysed and fitted.
-
-    Returns ``{"clean"|"noisy": {"errors": {joint: array (stances, 2)}, "fits": ..., "analysis": ...}}``
-    with the relative errors of k0 and k1 per analysed stance.
-    """
-    from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording
-    from hop_impedance.biomech.body_model import body_model_from_stature
-    from hop_impedance.impedance.recording_fits import default_fit_options, fit_recording
-    from hop_impedance.io.recording_io import load_recording
-    from hop_impedance.simulation.hopping_trial import simulate_hopping
-    from hop_impedance.simulation.scenarios import SEED_SUBJECT, Effects, hopping_config
-    from hop_impedance.simulation.sensors import SensorConfig, noise_free, sample_recording
-    from hop_impedance.simulation.simulate import write_simulated_recording
-    from hop_impedance.simulation.truth import trial_truth
+    """The trials of SEEDS at one frequency, each recorded noise-free and noisy, analysed, fitted and pooled:
+    ``{"clean"|"noisy": RecoveryResult, "freq": float}``."""
+    from hop_impedance.validation.coefficient_recovery import RecoveryResult, recover_trial, simulate_law_trial
 
     freq = request.param
-    effects = Effects(push_off=False)
-    chain, config = hopping_config(freq, "hard", N_HOPS, effects)
-    trial = simulate_hopping(chain, config, seed=SEED)
-    out = {}
-    for label, sensors in (("clean", noise_free(SensorConfig())), ("noisy", SensorConfig())):
-        rec, sensor_truth = sample_recording(trial, sensors, SEED_SUBJECT, np.random.default_rng([SEED, 1]))
-        truth = trial_truth(
-            trial, sensors, SEED_SUBJECT, body_model_from_stature(SEED_SUBJECT), effects.to_dict(), sensor_truth, {}
-        )
-        path = tmp_path_factory.mktemp(f"sim{freq}") / f"{label}.mcap"
-        write_simulated_recording(path, rec, truth)
-        cut = CUTOFF_HZ[label]
-        analysis = analyze_recording(load_recording(path), AnalysisOptions(marker_cutoff_hz=cut, force_cutoff_hz=cut))
-        options = replace(
-            default_fit_options(analysis.options),
-            reduce=False,
-            terms=("k0", "k1", "b0"),
-            exclude_touchdown_s=EDGE_S,
-            exclude_takeoff_s=EDGE_S,
-        )
-        fits = fit_recording(analysis, options)
-        errors = {joint: [] for joint in JOINTS}
-        truth_by_touchdown = {round(s["touchdown_s"], 2): s for s in truth["stances"]}
-        for stance, stance_fits in zip(analysis.stances, fits):
-            true = truth_by_touchdown.get(round(stance.touchdown_s, 2))
-            if true is None or stance.rejection_reason is not None:
-                continue
-            for joint in JOINTS:
-                fit = stance_fits[joint]
-                assert fit.ok, (label, stance.index, joint, fit.rejection_reason)
-                errors[joint].append(
-                    [fit.coefficients[k] / true["impedance"][joint][k] - 1.0 for k in ("k0", "k1")]
-                )
-        out[label] = {"errors": {j: np.asarray(e) for j, e in errors.items()}, "fits": fits, "analysis": analysis}
-    out["freq"] = freq
+    folder = tmp_path_factory.mktemp(f"sim{freq}")
+    out = {"freq": freq, "clean": RecoveryResult(), "noisy": RecoveryResult()}
+    for seed in SEEDS:
+        trial = simulate_law_trial(freq, seed, N_HOPS)
+        for label in ("clean", "noisy"):
+            out[label].extend(recover_trial(freq, seed, label == "noisy", folder, n_hops=N_HOPS,
+                                            cutoff_hz=CUTOFF_HZ[label], edge_s=EDGE_S, trial=trial))
     return out
 
 
@@ -201,12 +178,18 @@ def test_end_to_end_recovery_of_k0_k1(simulated_trial, noise, joint, request):
     missed = MISSED_TARGETS.get((noise, freq, joint))
     if missed is not None:
         request.applymarker(
-            pytest.mark.xfail(strict=True, reason=f"measured about {missed:.0%} (target {TOLERANCE[noise]:.0%})")
+            pytest.mark.xfail(strict=True, reason=f"measured about {missed:.1%} (target {TOLERANCE[noise]:.0%})")
         )
-    errors = simulated_trial[noise]["errors"][joint]
-    assert errors.shape[0] >= N_HOPS - 1, "stances lost on the way"
+    result = simulated_trial[noise]
+    errors = result.error_array(joint)
+    assert not result.rejected[joint], result.rejected[joint]
+    assert errors.shape[0] + result.infeasible[joint] >= len(SEEDS) * (N_HOPS - 1), "stances lost on the way"
+    assert errors.shape[0] >= 2 * len(SEEDS), f"only {errors.shape[0]} stances compared ({result.infeasible[joint]} infeasible)"
     median = np.median(errors, axis=0)
-    assert np.all(np.abs(median) <= TOLERANCE[noise]), f"{joint} {freq} Hz {noise}: median k0, k1 errors {median}"
+    assert np.all(np.abs(median) <= TOLERANCE[noise]), (
+        f"{joint} {freq} Hz {noise}: median k0, k1 errors {median} over {errors.shape[0]} stances "
+        f"(per-stance SD {errors.std(axis=0)})"
+    )
 
 
 #: Seed Table 3: joints whose constant-model error is significantly above the variable model's (P < 0.05).
@@ -220,7 +203,7 @@ def test_variable_model_beats_constant_model_end_to_end(simulated_trial):
     floor dominates both; measured 2.2 Hz hip: 9.7 vs 14.5)."""
     freq = simulated_trial["freq"]
     for joint in JOINTS:
-        fits = [f[joint] for f in simulated_trial["noisy"]["fits"] if f[joint].ok]
+        fits = [f[joint] for f in simulated_trial["noisy"].fits if f[joint].ok]
         variable = np.median([f.table3_variable for f in fits])
         constant = np.median([f.table3_constant for f in fits])
         factor = 0.5 if joint in SEED_TABLE3_SIGNIFICANT[freq] else 1.0

@@ -1,0 +1,1 @@
+"""End-to-end checks of the pipeline against the simulator's known truth (no ROS imports)."""

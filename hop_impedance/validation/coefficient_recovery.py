@@ -1,0 +1,173 @@
+"""Coefficient recovery: simulate a trial, record it, analyse it, fit it, compare with the law.
+
+The check of issue 5 ("recovery of known coefficients from simulated
+stances"), shared by ``test/impedance/test_simulated_recordings.py`` and
+``bench/recovery_errors.py``:
+
+1. a push-off-free hopping trial on the hard surface (the push-off is not an
+   Eq. 3 term), seed Table 2 stiffness at the trial's frequency;
+2. its sensors sampled noise-free or with realistic noise and written as an
+   MCAP recording with its truth;
+3. ``analyze_recording`` (stance detection, filtering, kinematics, inverse
+   dynamics) and ``fit_recording`` with the law's structure given;
+4. per stance and joint, the relative error of k0 and k1 against the law.
+
+Stances where the simulated law itself leaves the fit's feasible set (its K
+or B below zero somewhere on the stance, which the seed's Eq. 7 forbids) are
+counted, not compared: no constrained fit can return those coefficients.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+JOINTS = ("ankle", "knee", "hip")
+#: The fitted structure: the simulated law is K = k0 + k1 (rho - rho0), B = b0.
+LAW_TERMS = ("k0", "k1", "b0")
+
+
+@dataclass
+class RecoveryResult:
+    """Per-stance k0/k1 errors of one or more trials (pooled with :meth:`extend`).
+
+    Attributes
+    ----------
+    errors : dict
+        joint -> list of ``[k0, k1]`` relative errors (fraction, fit / law - 1), one per compared stance.
+    infeasible : dict
+        joint -> number of stances whose law breaks Eq. 7 (not compared).
+    rejected : dict
+        joint -> rejection reasons of fits on compared stances (the stance is then not compared).
+    fits : list
+        ``fit_recording`` output per analysed stance (``{joint: JointImpedanceFit}``).
+    trial_medians : list
+        Per trial, joint -> median ``[k0, k1]`` error (NaN when no stance was compared).
+    simulated_stances : int
+        Stances the simulator produced.
+    """
+
+    errors: dict = field(default_factory=lambda: {j: [] for j in JOINTS})
+    infeasible: dict = field(default_factory=lambda: {j: 0 for j in JOINTS})
+    rejected: dict = field(default_factory=lambda: {j: [] for j in JOINTS})
+    fits: list = field(default_factory=list)
+    trial_medians: list = field(default_factory=list)
+    simulated_stances: int = 0
+
+    def extend(self, other: "RecoveryResult") -> None:
+        """Pool another trial's stances into this result."""
+        for joint in JOINTS:
+            self.errors[joint] += other.errors[joint]
+            self.infeasible[joint] += other.infeasible[joint]
+            self.rejected[joint] += other.rejected[joint]
+        self.fits += other.fits
+        self.trial_medians += other.trial_medians
+        self.simulated_stances += other.simulated_stances
+
+    def error_array(self, joint: str) -> np.ndarray:
+        """Relative k0/k1 errors of the compared stances, shape (n, 2)."""
+        return np.asarray(self.errors[joint], float).reshape(-1, 2)
+
+
+def law_breaks_eq7(true_stance: dict, joint_index: int) -> bool:
+    """True when the simulated law's own K or B is below zero somewhere on the true stance samples.
+
+    Uses the truth file's law (``impedance``: k0..k3, b0..b3 with its rho0,
+    omega0) on the simulator's own angle and rate samples. Example: 1.53 Hz,
+    hip, first stance of seed 11: K reaches -46 N m/rad where the hip extends
+    0.9 rad past its touchdown angle.
+    """
+    imp = true_stance["impedance"][JOINTS[joint_index]]
+    samples = true_stance["samples"]
+    d = np.asarray(samples["rho_rad"], float)[:, joint_index] - imp["rho0_rad"]
+    w = np.asarray(samples["omega_rad_s"], float)[:, joint_index] - imp["omega0_rad_s"]
+    stiffness = imp["k0"] + imp["k1"] * d + imp["k2"] * d**2 + imp["k3"] * w
+    damping = imp["b0"] + imp["b1"] * w + imp["b2"] * w**2 + imp["b3"] * d
+    return bool(stiffness.min() < 0.0 or damping.min() < 0.0)
+
+
+def recover_trial(
+    freq_hz: float,
+    seed: int,
+    noisy: bool,
+    folder: Path,
+    *,
+    n_hops: int = 4,
+    cutoff_hz: float = 12.0,
+    edge_s: float = 0.010,
+    trial=None,
+) -> RecoveryResult:
+    """Simulate (or reuse ``trial``), record, analyse and fit one trial; k0/k1 errors per stance.
+
+    Parameters
+    ----------
+    freq_hz : float
+        Hopping frequency (Hz); the law uses seed Table 2 at that frequency.
+    seed : int
+        Hop-to-hop variability seed of the simulation; the sensor noise uses ``[seed, 1]``.
+    noisy : bool
+        Realistic sensor noise (1 mm markers, 2 N force, 0.5 N m torque) or none.
+    folder : Path
+        Where the MCAP recording is written.
+    n_hops : int
+        Hops simulated (the trial may stop earlier: without push-off it loses energy).
+    cutoff_hz : float
+        Marker and force low-pass cut-off of the analysis (Hz).
+    edge_s : float
+        Time left out of the objective at each stance edge (s), ``FitOptions.exclude_*``.
+    trial : HoppingTrial, optional
+        An already simulated trial of ``freq_hz`` and ``seed`` (saves the simulation
+        when the same trial is recorded twice).
+    """
+    from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording
+    from hop_impedance.biomech.body_model import body_model_from_stature
+    from hop_impedance.impedance.recording_fits import default_fit_options, fit_recording
+    from hop_impedance.io.recording_io import load_recording
+    from hop_impedance.simulation.scenarios import SEED_SUBJECT, Effects
+    from hop_impedance.simulation.sensors import SensorConfig, noise_free, sample_recording
+    from hop_impedance.simulation.simulate import write_simulated_recording
+    from hop_impedance.simulation.truth import trial_truth
+
+    effects = Effects(push_off=False)
+    if trial is None:
+        trial = simulate_law_trial(freq_hz, seed, n_hops)
+    sensors = SensorConfig() if noisy else noise_free(SensorConfig())
+    rec, sensor_truth = sample_recording(trial, sensors, SEED_SUBJECT, np.random.default_rng([seed, 1]))
+    truth = trial_truth(trial, sensors, SEED_SUBJECT, body_model_from_stature(SEED_SUBJECT), effects.to_dict(), sensor_truth, {})
+    path = Path(folder) / f"recovery_{freq_hz:.2f}hz_seed{seed}_{'noisy' if noisy else 'clean'}.mcap"
+    write_simulated_recording(path, rec, truth)
+    analysis = analyze_recording(load_recording(path), AnalysisOptions(marker_cutoff_hz=cutoff_hz, force_cutoff_hz=cutoff_hz))
+    options = replace(
+        default_fit_options(analysis.options), reduce=False, terms=LAW_TERMS, exclude_touchdown_s=edge_s, exclude_takeoff_s=edge_s
+    )
+    fits = fit_recording(analysis, options)
+    result = RecoveryResult(fits=fits, simulated_stances=len(truth["stances"]))
+    truth_by_touchdown = {round(s["touchdown_s"], 2): s for s in truth["stances"]}
+    for stance, stance_fits in zip(analysis.stances, fits):
+        true = truth_by_touchdown.get(round(stance.touchdown_s, 2))
+        if true is None or stance.rejection_reason is not None:
+            continue
+        for j, joint in enumerate(JOINTS):
+            fit = stance_fits[joint]
+            if law_breaks_eq7(true, j):
+                result.infeasible[joint] += 1
+            elif not fit.ok:
+                result.rejected[joint].append(fit.rejection_reason)
+            else:
+                law = true["impedance"][joint]
+                result.errors[joint].append([fit.coefficients[k] / law[k] - 1.0 for k in ("k0", "k1")])
+    result.trial_medians.append(
+        {j: np.median(result.error_array(j), axis=0) if result.errors[j] else np.full(2, np.nan) for j in JOINTS}
+    )
+    return result
+
+
+def simulate_law_trial(freq_hz: float, seed: int, n_hops: int = 4):
+    """The push-off-free hard-surface hopping trial :func:`recover_trial` records (seed Table 2 law)."""
+    from hop_impedance.simulation.hopping_trial import simulate_hopping
+    from hop_impedance.simulation.scenarios import Effects, hopping_config
+
+    chain, config = hopping_config(freq_hz, "hard", n_hops, Effects(push_off=False))
+    return simulate_hopping(chain, config, seed=seed)
