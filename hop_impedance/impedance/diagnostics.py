@@ -135,6 +135,8 @@ def _standardise(design: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     norm = np.linalg.norm(centred, axis=0)
     scale_floor = 1e-12 * max(float(np.abs(X).max(initial=0.0)), 1e-300) * np.sqrt(X.shape[0])
     ok = norm > scale_floor
+    if ok.all():
+        return centred / norm, ok
     Z = np.zeros_like(centred)
     Z[:, ok] = centred[:, ok] / norm[ok]
     return Z, ok
@@ -169,12 +171,14 @@ def collinearity_diagnostics(
     R = Z.T @ Z
     # one eigen-decomposition of the well-defined block serves the
     # determinant, the eigenvalue ratio and the VIFs
-    R_ok = R[ok][:, ok]
+    all_ok = bool(ok.all())
+    R_ok = R if all_ok else R[ok][:, ok]
     eig = np.linalg.eigvalsh(R_ok) if ok.any() else np.zeros(0)
     vif = _vifs_from_correlation(R_ok, eig, ok)
-    R[~ok, :] = np.nan
-    R[:, ~ok] = np.nan
-    if ok.all() and X.shape[1] > 0:
+    if not all_ok:
+        R[~ok, :] = np.nan
+        R[:, ~ok] = np.nan
+    if all_ok and X.shape[1] > 0:
         corr_det = float(np.prod(eig))
         corr_ratio = float(eig[-1] / eig[0]) if eig[0] > 0.0 else float("inf")
     else:

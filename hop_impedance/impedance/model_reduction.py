@@ -43,13 +43,13 @@ SSE (e.g. constrained fits); the tests show both paths end in the same terms.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
 from scipy import special
 
-from hop_impedance.impedance.diagnostics import variance_inflation_factors
 from hop_impedance.impedance.regression_model import TERM_NAMES
 
 #: Terms that must be eliminated before a term may be tested (polynomial hierarchy).
@@ -144,20 +144,17 @@ def effective_sample_count(residuals: np.ndarray, minimum: float) -> float:
     return float(np.clip(n / (1.0 + 2.0 * total), minimum, n))
 
 
-def _ols_t_squared(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """OLS coefficients, partial F (= t^2) of every column and SSE, via QR."""
-    norms = np.linalg.norm(X, axis=0)
-    Q, R = np.linalg.qr(X / norms)
-    R_inv = np.linalg.inv(R)
-    beta_s = R_inv @ (Q.T @ y)
-    resid = y - (X / norms) @ beta_s
-    sse = float(resid @ resid)
-    n, p = X.shape
-    sigma2 = sse / max(n - p, 1)
-    var_s = sigma2 * np.sum(R_inv**2, axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        f = np.where(var_s > 0, beta_s**2 / var_s, np.inf)
-    return beta_s / norms, f, sse
+def _downdate_inverse(H: np.ndarray, j: int) -> np.ndarray:
+    """Inverse Gram (or correlation) matrix after removing variable j, same shape as ``H``.
+
+    Partitioned-inverse identity ``H' = H_{-j,-j} - H_{-j,j} H_{j,-j} / H_jj``
+    applied to the whole matrix: row and column j (and those of variables
+    removed earlier) are left in place with meaningless values and must be
+    ignored; every other entry is the same number as deleting row and column
+    j first, because it only reads itself, row j and column j.
+    """
+    h = H[:, j]
+    return H - np.outer(h, h / h[j])
 
 
 class _OlsDowndate:
@@ -173,43 +170,57 @@ class _OlsDowndate:
 
     so each elimination step costs a few 9x9 operations instead of a new QR
     (the same numbers as refitting, up to rounding of order
-    machine epsilon x condition number squared).
+    machine epsilon x condition number squared). Removed columns stay in the
+    arrays, masked by ``kept`` (see :func:`_downdate_inverse`).
+
+    Parameters
+    ----------
+    scaled_design : ndarray, shape (N, p)
+        Design divided by its column norms (unit columns).
+    y : ndarray, shape (N,)
+        Target.
     """
 
-    def __init__(self, X: np.ndarray, y: np.ndarray) -> None:
-        norms = np.linalg.norm(X, axis=0)
-        Q, R = np.linalg.qr(X / norms)
+    def __init__(self, scaled_design: np.ndarray, y: np.ndarray) -> None:
+        Q, R = np.linalg.qr(scaled_design)
         R_inv = np.linalg.inv(R)
         self.beta = R_inv @ (Q.T @ y)
-        resid = y - (X / norms) @ self.beta
+        resid = y - scaled_design @ self.beta
         self.sse = float(resid @ resid)
         self.H = R_inv @ R_inv.T
-        self.n = X.shape[0]
+        self.n = scaled_design.shape[0]
+        self.kept = list(range(self.beta.size))
 
-    def t_squared(self) -> np.ndarray:
-        """Partial F (= t^2) of every current column, shape (p,)."""
-        p = self.beta.size
-        sigma2 = self.sse / max(self.n - p, 1)
-        var = sigma2 * np.diag(self.H)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(var > 0, self.beta**2 / var, np.inf)
+    def t_squared(self) -> list[float]:
+        """Partial F (= t^2) of every kept column, in column order (inf for a zero variance)."""
+        sigma2 = self.sse / max(self.n - len(self.kept), 1)
+        beta, h = self.beta.tolist(), np.diag(self.H).tolist()
+        variances = [sigma2 * h[j] for j in self.kept]
+        return [beta[j] * beta[j] / var if var > 0 else math.inf for j, var in zip(self.kept, variances)]
 
     def remove(self, j: int) -> None:
-        """Drop current column j (0 = intercept column)."""
+        """Drop column j of the starting design (0 = intercept column)."""
         h = self.H[:, j]
         hjj = h[j]
         self.sse += float(self.beta[j] ** 2 / hjj)
-        keep = np.arange(self.beta.size) != j
-        self.beta = (self.beta - h * (self.beta[j] / hjj))[keep]
-        self.H = (self.H - np.outer(h, h / hjj))[keep][:, keep]
+        self.beta = self.beta - h * (self.beta[j] / hjj)
+        self.H = _downdate_inverse(self.H, j)
+        self.kept.remove(j)
 
 
-def _is_singular(X: np.ndarray) -> bool:
+def _scale_columns(X: np.ndarray) -> tuple[np.ndarray, bool]:
+    """``X`` divided by its column norms, and whether ``X`` is numerically singular.
+
+    Singular: a zero column, or smallest / largest singular value of the
+    column-scaled design below 1e-10.
+    """
     norms = np.linalg.norm(X, axis=0)
     if np.any(norms == 0.0):
-        return True
-    s = np.linalg.svd(X / norms, compute_uv=False)
-    return bool(s[-1] < 1e-10 * s[0])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return X / norms, True
+    scaled = X / norms
+    s = np.linalg.svd(scaled, compute_uv=False)
+    return scaled, bool(s[-1] < 1e-10 * s[0])
 
 
 def _exactly_explained(X: np.ndarray) -> np.ndarray:
@@ -226,6 +237,49 @@ def _exactly_explained(X: np.ndarray) -> np.ndarray:
     return np.array(flags)
 
 
+def _drop_exactly_collinear(
+    design: np.ndarray, terms: tuple[str, ...]
+) -> tuple[list[int], list[EliminationStep], np.ndarray, np.ndarray]:
+    """Remove exactly collinear (or zero) term columns until the design has full rank.
+
+    The highest-order exactly-explained term goes first (respecting the
+    hierarchy). ``design`` is (N, 1 + len(terms)) with the intercept first.
+
+    Returns
+    -------
+    active : list of int
+        Positions (into ``terms``) of the remaining terms.
+    steps : list of EliminationStep
+        The ``"singular"`` removals.
+    X, scaled : ndarray, shape (N, 1 + len(active))
+        The remaining design, and divided by its column norms.
+    """
+    active = list(range(len(terms)))
+    steps: list[EliminationStep] = []
+    X = design
+    scaled, singular = _scale_columns(X)
+    while active and singular:
+        explained = _exactly_explained(X)
+        dependent = [i for i, flag in zip(active, explained) if flag]
+        if not dependent:  # ill-conditioned but no column is an exact combination: keep all
+            break
+        names = [terms[i] for i in active]
+        eligible = [i for i in dependent if not any(h in names for h in HIGHER_ORDER_TERMS[terms[i]])]
+        worst = (eligible or dependent)[-1]
+        steps.append(EliminationStep(terms[worst], "singular", float("nan"), 0.0, float("inf")))
+        active.remove(worst)
+        X = np.ascontiguousarray(design[:, [0] + [i + 1 for i in active]])
+        scaled, singular = _scale_columns(X)
+    return active, steps, X, scaled
+
+
+def _correlation_matrix(columns: np.ndarray) -> np.ndarray:
+    """Correlation matrix of the columns (centred, unit-norm; a constant column gives a zero row), (p, p)."""
+    Z = columns - columns.mean(axis=0)
+    Z = Z / np.where(np.linalg.norm(Z, axis=0) > 0, np.linalg.norm(Z, axis=0), 1.0)
+    return Z.T @ Z
+
+
 def reduce_model(
     term_columns: np.ndarray,
     moment_nm: np.ndarray,
@@ -237,6 +291,7 @@ def reduce_model(
     sse_function: Callable[[tuple[str, ...]], float] | None = None,
     effective_samples: float | None = None,
     familywise: bool = False,
+    correlation: np.ndarray | None = None,
 ) -> ReductionResult:
     """Backward elimination of Eq. 3 terms by partial F-tests.
 
@@ -260,6 +315,15 @@ def reduce_model(
     sse_function : callable, optional
         ``sse_function(kept_terms) -> SSE`` to test with another fit (e.g. the
         constrained OSQP fit) instead of OLS; slower (one fit per candidate).
+    effective_samples : float, optional
+        n_eff of the tests (clipped to [1, N]); estimated from the residual
+        autocorrelation of the full OLS model when None.
+    familywise : bool
+        Test at alpha / (number of eligible terms) (Bonferroni) per step.
+    correlation : ndarray, shape (len(terms), len(terms)), optional
+        Correlation matrix of the standardised ``term_columns`` (as in
+        ``collinearity_diagnostics(term_columns, terms).correlation_matrix``)
+        to reuse for the VIFs; computed here when None or not finite.
 
     Returns
     -------
@@ -272,107 +336,86 @@ def reduce_model(
     y = np.asarray(moment_nm, float)
     n = y.size
     ones = np.ones(n) if intercept is None else np.asarray(intercept, float)
-    design = {name: columns[:, i] for i, name in enumerate(terms)}
-    active = [name for name in terms]
-    steps: list[EliminationStep] = []
+    design = np.empty((n, 1 + len(terms)))  # C order whatever the layout of term_columns
+    design[:, 0], design[:, 1:] = ones, columns
+    active_positions, steps, start_design, scaled = _drop_exactly_collinear(design, terms)
+    active = list(active_positions)  # term positions still in the model, in term order
+    # design column of each term position in the OLS object (after any singular removals)
+    ols_column = {position: k + 1 for k, position in enumerate(active_positions)}
 
-    def build(names: Sequence[str]) -> np.ndarray:
-        return np.column_stack([ones] + [design[name] for name in names])
-
-    # 1. exact collinearity (or zero columns): remove until the design has full rank,
-    #    the highest-order exactly-explained term first (respecting the hierarchy).
-    while active and _is_singular(build(active)):
-        explained = _exactly_explained(build(active))
-        dependent = [name for name, flag in zip(active, explained) if flag]
-        if not dependent:  # ill-conditioned but no column is an exact combination: keep all
-            break
-        eligible = [t for t in dependent if not any(h in active for h in HIGHER_ORDER_TERMS[t])]
-        worst = (eligible or dependent)[-1]
-        steps.append(EliminationStep(worst, "singular", float("nan"), 0.0, float("inf")))
-        active.remove(worst)
-
-    start_design = build(active) if active else None  # built once for the n_eff and OLS set-up
+    ols = _OlsDowndate(scaled, y) if active else None
     n_eff = float(n)
     if effective_samples is not None:
         n_eff = float(np.clip(effective_samples, 1.0, n))
     elif autocorrelation_correction and active:
-        beta, _, _ = _ols_t_squared(start_design, y)
+        beta = ols.beta / np.linalg.norm(start_design, axis=0)  # unscaled OLS coefficients
         n_eff = effective_sample_count(y - start_design @ beta, minimum=len(active) + 3.0)
 
-    if sse_function is None:
-        ols = _OlsDowndate(start_design, y) if active else None
-
-    def partial_tests(names: list[str]) -> dict[str, tuple[float, float]]:
-        p = len(names) + 1
-        dof = n_eff - p
+    def partial_tests() -> tuple[dict[int, float], dict[int, float]]:
+        """F (n_eff-corrected) and p-value of each active term position."""
+        dof = n_eff - (len(active) + 1)
         if sse_function is None:
-            f_all = ols.t_squared()
-            f = {name: float(f_all[i + 1]) for i, name in enumerate(names)}
+            f = ols.t_squared()[1:]
         else:
-            sse_full = sse_function(tuple(names))
-            f = {}
-            for name in names:
-                reduced = tuple(other for other in names if other != name)
-                f[name] = (sse_function(reduced) - sse_full) / max(sse_full / (n - p), 1e-300)
-        f_eff = np.array(list(f.values())) * n_eff / n
-        p_values = special.fdtrc(1.0, dof, f_eff) if dof > 0 else np.ones(len(f))
-        return {name: (float(fe), float(pv)) for name, fe, pv in zip(f, f_eff, p_values)}
-
-    Z = columns - columns.mean(axis=0)
-    Z = Z / np.where(np.linalg.norm(Z, axis=0) > 0, np.linalg.norm(Z, axis=0), 1.0)
-    correlation = Z.T @ Z
-    position = {name: i for i, name in enumerate(terms)}
+            names = tuple(terms[i] for i in active)
+            sse_full = sse_function(names)
+            f = [
+                (sse_function(tuple(other for other in names if other != name)) - sse_full)
+                / max(sse_full / (n - len(names) - 1), 1e-300)
+                for name in names
+            ]
+        f_eff = [value * n_eff / n for value in f]
+        p_values = special.fdtrc(1.0, dof, f_eff).tolist() if dof > 0 else [1.0] * len(f)
+        return dict(zip(active, f_eff)), dict(zip(active, p_values))
 
     # Inverse correlation matrix of the active terms: one inverse, then the
     # same partitioned-inverse downdate as the OLS path per removed term.
-    inverse: dict[str, np.ndarray | None] = {"matrix": None}
+    inverse: dict = {"matrix": None, "positions": None, "correlation": correlation}
 
-    def vifs(names: list[str]) -> dict[str, float]:
+    def vifs() -> dict[int, float]:
+        """VIF of each active term position."""
         if inverse["matrix"] is None:
-            idx = [position[name] for name in names]
+            if inverse["correlation"] is None or not np.all(np.isfinite(inverse["correlation"])):
+                inverse["correlation"] = _correlation_matrix(columns)
             try:
-                inverse["matrix"] = np.linalg.inv(correlation[idx][:, idx])
+                inverse["matrix"] = np.linalg.inv(inverse["correlation"][active][:, active])
             except np.linalg.LinAlgError:
-                return {name: float("inf") for name in names}
-        return dict(zip(names, np.diag(inverse["matrix"])))
+                return dict.fromkeys(active, math.inf)
+            inverse["positions"] = list(active)
+        return dict(zip(inverse["positions"], np.diag(inverse["matrix"]).tolist()))
 
-    def remove_from_inverse(j: int) -> None:
-        H = inverse["matrix"]
-        if H is None:
-            return
-        h = H[:, j]
-        keep = np.arange(h.size) != j
-        inverse["matrix"] = (H - np.outer(h, h / h[j]))[keep][:, keep]
-
-    tests = partial_tests(active) if active else {}
+    position = {name: i for i, name in enumerate(terms)}
+    higher = [[position[h] for h in HIGHER_ORDER_TERMS[name] if h in position] for name in terms]
+    f_eff, p_values = partial_tests() if active else ({}, {})
     while active:
-        eligible = [t for t in active if not any(h in active for h in HIGHER_ORDER_TERMS[t])]
+        eligible = [i for i in active if not any(h in active for h in higher[i])]
         level = alpha / len(eligible) if familywise else alpha
-        candidates = [t for t in eligible if tests[t][1] > level]
+        candidates = [i for i in eligible if p_values[i] > level]
         if not candidates:
             break
-        vif = vifs(active)
-        collinear = [t for t in candidates if vif[t] > vif_limit]
+        vif = vifs()
+        collinear = [i for i in candidates if vif[i] > vif_limit]
         # Smallest partial F = smallest loss of fit (equal to the largest p when
         # the test has degrees of freedom; still defined when n_eff <= p).
         if collinear:
-            worst = min(collinear, key=lambda t: tests[t][0])
+            worst = min(collinear, key=f_eff.__getitem__)
             reason = "collinear"
         else:
-            worst = min(candidates, key=lambda t: tests[t][0])
+            worst = min(candidates, key=f_eff.__getitem__)
             reason = "not significant"
-        steps.append(EliminationStep(worst, reason, tests[worst][1], tests[worst][0], float(vif[worst])))
+        steps.append(EliminationStep(terms[worst], reason, p_values[worst], f_eff[worst], float(vif[worst])))
         if sse_function is None:
-            ols.remove(active.index(worst) + 1)
-        remove_from_inverse(active.index(worst))
+            ols.remove(ols_column[worst])
+        if inverse["matrix"] is not None:
+            inverse["matrix"] = _downdate_inverse(inverse["matrix"], inverse["positions"].index(worst))
         active.remove(worst)
-        tests = partial_tests(active) if active else {}
+        f_eff, p_values = partial_tests() if active else ({}, {})
 
-    kept = tuple(t for t in TERM_NAMES if t in active)
+    kept = tuple(t for t in TERM_NAMES if t in position and position[t] in active)
     return ReductionResult(
         terms=kept,
-        p_values={t: tests[t][1] for t in kept},
-        f_statistics={t: tests[t][0] for t in kept},
+        p_values={t: p_values[position[t]] for t in kept},
+        f_statistics={t: f_eff[position[t]] for t in kept},
         steps=tuple(steps),
         effective_samples=n_eff,
         alpha=alpha,

@@ -314,6 +314,7 @@ def fit_joint_stance(
             vif_limit=options.vif_limit,
             autocorrelation_correction=options.autocorrelation_correction,
             effective_samples=n_eff_given,
+            correlation=diagnostics.correlation_matrix,
         )
         terms = reduction.terms
         n_eff = reduction.effective_samples
