@@ -42,6 +42,7 @@ every row, so the problem is never primal infeasible.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,9 +105,15 @@ def _upper_csc(matrix: np.ndarray) -> sparse.csc_matrix:
     return sparse.csc_matrix((matrix[rows, cols], rows, indptr), shape=(p, p))
 
 
+@functools.cache
+def _lower_triangle_indices(p: int) -> tuple[np.ndarray, np.ndarray]:
+    """``np.tril_indices(p)``, built once per size."""
+    return np.tril_indices(p)
+
+
 def _upper_values(matrix: np.ndarray) -> np.ndarray:
     """Column-major upper-triangle values of a square matrix (data of :func:`_upper_csc`)."""
-    return matrix.T[np.tril_indices(matrix.shape[0])]
+    return matrix.T[_lower_triangle_indices(matrix.shape[0])]
 
 
 def _dense_csc(matrix: np.ndarray) -> sparse.csc_matrix:
@@ -138,8 +145,9 @@ def _most_violated_per_run(slack: np.ndarray, violated: np.ndarray) -> np.ndarra
     added at a time (adding whole runs makes the working set degenerate).
     """
     index = np.flatnonzero(violated)
-    runs = np.split(index, np.flatnonzero(np.diff(index) > 1) + 1)
-    return np.array([run[np.argmin(slack[run])] for run in runs], dtype=int)
+    values = slack[index]
+    bounds = [0, *(np.flatnonzero(np.diff(index) > 1) + 1).tolist(), index.size]
+    return np.array([index[a + int(np.argmin(values[a:b]))] for a, b in zip(bounds[:-1], bounds[1:])], dtype=int)
 
 
 def _shows_active_row(rows: np.ndarray, x: np.ndarray, y: np.ndarray) -> bool:

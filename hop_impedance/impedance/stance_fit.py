@@ -298,10 +298,15 @@ def fit_joint_stance(
 
     regs = stance_regressors(t, rho, omega)
     window = fit_window(t, options)
-    tw, tauw = t[window], tau[window]
-    n = int(np.count_nonzero(window))
+    whole = bool(window.all())  # the default: nothing excluded, no windowed copies needed
+
+    def in_window(values: np.ndarray) -> np.ndarray:
+        return values if whole else values[window]
+
+    tw, tauw = in_window(t), in_window(tau)
+    n = tw.size
     start = tuple(name for name in TERM_NAMES if name in options.terms)
-    moment_rows = regs.moment_rows[window]  # (n, 9): every candidate model takes a column subset
+    moment_rows = in_window(regs.moment_rows)  # (n, 9): every candidate model takes a column subset
     full_columns = moment_rows[:, parameter_indices(start)[1:]]
     diagnostics = collinearity_diagnostics(full_columns, start)
     n_eff_given = _effective_samples(float(tw[-1] - tw[0]), n, options)
@@ -359,13 +364,13 @@ def fit_joint_stance(
     p_values = 2.0 * special.stdtr(dof, -np.abs(t_stat)) if dof > 0 else np.full(len(names), np.nan)
 
     moment_fit = regs.moment_rows @ theta
-    residual = (tau - moment_fit)[window]
+    residual = in_window(tau - moment_fit)
     sse = float(residual @ residual)
     sst = float(np.sum((tauw - tauw.mean()) ** 2))
     stiffness = regs.stiffness_rows @ theta
     k_overall = overall_stiffness(rho, tau)
     moment_constant = constant_stiffness_moment(rho, tau, k_overall if math.isfinite(k_overall) else 0.0)
-    sse_constant = float(np.sum((tau - moment_constant)[window] ** 2))
+    sse_constant = float(np.sum(in_window(tau - moment_constant) ** 2))
     frame_rate = (n - 1) / float(tw[-1] - tw[0])
     return JointImpedanceFit(
         status=solution.status,
