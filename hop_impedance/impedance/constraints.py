@@ -54,7 +54,7 @@ def constraint_rows(regressors: StanceRegressors, columns: np.ndarray) -> tuple[
             regressors.damper_power_rows[:, columns],
         )
     )
-    keep = np.any(blocks != 0.0, axis=1)
+    keep = (blocks != 0.0).any(axis=1)
     family = np.repeat(np.arange(len(CONSTRAINT_FAMILIES)), regressors.n_samples)
     return blocks[keep], family[keep]
 

@@ -215,7 +215,7 @@ def _scale_columns(X: np.ndarray) -> tuple[np.ndarray, bool]:
     column-scaled design below 1e-10.
     """
     norms = np.linalg.norm(X, axis=0)
-    if np.any(norms == 0.0):
+    if (norms == 0.0).any():
         with np.errstate(divide="ignore", invalid="ignore"):
             return X / norms, True
     scaled = X / norms
@@ -375,7 +375,7 @@ def reduce_model(
     def vifs() -> dict[int, float]:
         """VIF of each active term position."""
         if inverse["matrix"] is None:
-            if inverse["correlation"] is None or not np.all(np.isfinite(inverse["correlation"])):
+            if inverse["correlation"] is None or not np.isfinite(inverse["correlation"]).all():
                 inverse["correlation"] = _correlation_matrix(columns)
             try:
                 inverse["matrix"] = np.linalg.inv(inverse["correlation"][active][:, active])

@@ -135,7 +135,7 @@ def _unconstrained_optimum(P: np.ndarray, q: np.ndarray, Xs: np.ndarray, ys: np.
         x = np.linalg.solve(P, -q)
     except np.linalg.LinAlgError:
         return np.linalg.lstsq(Xs, ys, rcond=None)[0]
-    return x if np.all(np.isfinite(x)) else np.linalg.lstsq(Xs, ys, rcond=None)[0]
+    return x if np.isfinite(x).all() else np.linalg.lstsq(Xs, ys, rcond=None)[0]
 
 
 def _most_violated_per_run(slack: np.ndarray, violated: np.ndarray) -> np.ndarray:
@@ -144,10 +144,15 @@ def _most_violated_per_run(slack: np.ndarray, violated: np.ndarray) -> np.ndarra
     Neighbouring samples give nearly identical rows, so one row per run is
     added at a time (adding whole runs makes the working set degenerate).
     """
-    index = np.flatnonzero(violated)
-    values = slack[index]
-    bounds = [0, *(np.flatnonzero(np.diff(index) > 1) + 1).tolist(), index.size]
-    return np.array([index[a + int(np.argmin(values[a:b]))] for a, b in zip(bounds[:-1], bounds[1:])], dtype=int)
+    index = np.flatnonzero(violated).tolist()
+    values = slack[violated].tolist()
+    chosen, start = [], 0
+    for end in range(1, len(index) + 1):  # a few dozen rows: plain Python beats numpy's per-call cost
+        if end == len(index) or index[end] != index[end - 1] + 1:
+            run = values[start:end]
+            chosen.append(index[start + run.index(min(run))])  # first smallest, as np.argmin
+            start = end
+    return np.array(chosen, dtype=int)
 
 
 def _shows_active_row(rows: np.ndarray, x: np.ndarray, y: np.ndarray) -> bool:
@@ -158,7 +163,7 @@ def _shows_active_row(rows: np.ndarray, x: np.ndarray, y: np.ndarray) -> bool:
     unscaled iterate OSQP returns, so it is a guard against the "no active
     set" print, not OSQP's own decision.
     """
-    return bool(np.any(rows @ np.asarray(x, float) < -np.asarray(y, float)))
+    return bool((rows @ np.asarray(x, float) < -np.asarray(y, float)).any())
 
 
 class ConstrainedLeastSquares:
@@ -223,7 +228,7 @@ class ConstrainedLeastSquares:
         y = np.asarray(target, float)
         col_norm = np.sqrt(np.einsum("ij,ij->j", X, X))
         y_norm = float(np.sqrt(y @ y))
-        if np.any(col_norm == 0.0) or y_norm == 0.0:
+        if (col_norm == 0.0).any() or y_norm == 0.0:
             raise ValueError("constrained fit needs non-zero regressor columns and a non-zero moment")
         Xs = X / col_norm
         ys = y / y_norm
@@ -236,9 +241,9 @@ class ConstrainedLeastSquares:
         return X, y, Xs, ys, P, q, A, col_norm, y_norm
 
     def _result(self, X, y, A, xs, status, iterations, polished, y_norm, col_norm, working_rows, rounds):
-        converged = status == "solved" and bool(np.all(np.isfinite(xs)))
+        converged = status == "solved" and bool(np.isfinite(xs).all())
         theta = xs * y_norm / col_norm
-        residual = y - X @ theta if np.all(np.isfinite(theta)) else np.full_like(y, np.nan)
+        residual = y - X @ theta if np.isfinite(theta).all() else np.full_like(y, np.nan)
         slack = A @ xs if A.shape[0] else np.zeros(0)
         self.last_solution = QpSolution(
             coefficients=theta,
@@ -296,7 +301,7 @@ class ConstrainedLeastSquares:
             status, x_new, duals, iters, polished = self._solve_rows(solver, P_upper, q, A[work], x, duals)
             iterations += iters
             rounds += 1
-            if status != "solved" or not np.all(np.isfinite(x_new)):
+            if status != "solved" or not np.isfinite(x_new).all():
                 break
             x = x_new
         return self.solve_all_rows(design, target, constraints)
@@ -380,7 +385,7 @@ class ConstrainedLeastSquares:
             status = str(result.info.status)
             polished = int(result.info.status_polish) == 1
             duals = np.asarray(result.y, float)[:k]
-            right_signs = not np.any(duals > self.eps * max(1.0, float(np.abs(duals).max(initial=0.0))))
+            right_signs = not (duals > self.eps * max(1.0, float(np.abs(duals).max(initial=0.0)))).any()
             if status == "solved" and polished and right_signs:
                 break
         else:
@@ -404,7 +409,7 @@ class ConstrainedLeastSquares:
         # (KKT with zero multipliers); OSQP then only confirms it and polishing
         # (which needs an active set) is switched off.
         x_ols = np.linalg.lstsq(Xs, ys, rcond=None)[0]
-        ols_feasible = bool(np.all(A @ x_ols >= -1e-9))
+        ols_feasible = bool((A @ x_ols >= -1e-9).all())
         P_csc, A_csc = _upper_csc(P), _dense_csc(A)
         shape = (p, A.shape[0])
         if self._solver is not None and self._shape == shape:
@@ -429,7 +434,7 @@ class ConstrainedLeastSquares:
             result = self._solver.solve(raise_error=False)
         status = str(result.info.status)
         xs = np.asarray(result.x, float)
-        if status == "solved" and np.all(np.isfinite(xs)):
+        if status == "solved" and np.isfinite(xs).all():
             self._last_x[p] = xs.copy()
         return self._result(
             X, y, A, xs, status, result.info.iter, int(result.info.status_polish) == 1, y_norm, col_norm, -1, 0

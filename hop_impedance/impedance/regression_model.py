@@ -167,7 +167,7 @@ def cumulative_integral(values: np.ndarray, time_s: np.ndarray) -> np.ndarray:
             out[1] = 0.5 * (values[0] + values[1]) * (time_s[1] - time_s[0])
         return out
     step = np.diff(time_s)
-    if np.all(np.abs(step - step[0]) <= 1e-9 * step[0]):  # uniform: scipy's faster path
+    if (np.abs(step - step[0]) <= 1e-9 * step[0]).all():  # uniform: scipy's faster path
         integral = cumulative_simpson(values, dx=float(step.mean()), axis=0)
     else:
         integral = cumulative_simpson(values, x=time_s, axis=0)

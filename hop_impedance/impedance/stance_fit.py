@@ -205,7 +205,7 @@ def validate_stance(
             return f"{bad} of {n} {name} samples are NaN or infinite"
     if n < options.min_samples:
         return f"too few samples: {n} < {options.min_samples}"
-    if np.any(np.diff(time_s) <= 0.0):
+    if (np.diff(time_s) <= 0.0).any():
         return "time stamps are not strictly increasing"
     duration = float(time_s[-1] - time_s[0])
     if duration < options.min_duration_s:
