@@ -19,7 +19,7 @@ has zero variance; standardising is what removes it from the problem).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -47,6 +47,11 @@ class CollinearityDiagnostics:
         the standardised design).
     variance_inflation_factors : ndarray, shape (p,)
         VIF of each term.
+    correlation_inverse : ndarray, shape (p, p), or None
+        R^-1 (the VIFs are its diagonal) when every column is well defined
+        and R is not singular, else None; not reported (not in
+        :meth:`to_json`), kept so that the model reduction does not invert R
+        again.
     """
 
     terms: tuple[str, ...]
@@ -56,6 +61,7 @@ class CollinearityDiagnostics:
     correlation_determinant: float
     correlation_eigenvalue_ratio: float
     variance_inflation_factors: np.ndarray
+    correlation_inverse: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def to_json(self) -> dict:
         """Plain-JSON form (lists and floats; inf/NaN become None)."""
@@ -112,20 +118,21 @@ def variance_inflation_factors(design: np.ndarray) -> np.ndarray:
     if not ok.any():
         return np.full(design.shape[1], np.inf)
     R = Z[:, ok].T @ Z[:, ok]
-    return _vifs_from_correlation(R, np.linalg.eigvalsh(R), ok)
+    return _vifs_from_correlation(R, np.linalg.eigvalsh(R), ok)[0]
 
 
-def _vifs_from_correlation(R: np.ndarray, eig: np.ndarray, ok: np.ndarray) -> np.ndarray:
-    """VIFs (diagonal of R^-1) of the ``ok`` columns, inf elsewhere or when R is singular.
+def _vifs_from_correlation(R: np.ndarray, eig: np.ndarray, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """VIFs (diagonal of R^-1) of the ``ok`` columns, inf elsewhere or when R is singular; and R^-1 (or None).
 
     ``R`` is the correlation matrix of the ``ok`` columns and ``eig`` its
     ascending eigenvalues (shared with the other diagnostics).
     """
     vif = np.full(ok.size, np.inf)
     if eig.size == 0 or eig[0] <= 1e-13 * max(eig[-1], 1.0):
-        return vif
-    vif[ok] = np.diag(np.linalg.inv(R))
-    return vif
+        return vif, None
+    inverse = np.linalg.inv(R)
+    vif[ok] = np.diag(inverse)
+    return vif, inverse
 
 
 def _standardise(design: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -174,7 +181,7 @@ def collinearity_diagnostics(
     all_ok = bool(ok.all())
     R_ok = R if all_ok else R[ok][:, ok]
     eig = np.linalg.eigvalsh(R_ok) if ok.any() else np.zeros(0)
-    vif = _vifs_from_correlation(R_ok, eig, ok)
+    vif, inverse = _vifs_from_correlation(R_ok, eig, ok)
     if not all_ok:
         R[~ok, :] = np.nan
         R[:, ~ok] = np.nan
@@ -191,4 +198,5 @@ def collinearity_diagnostics(
         correlation_determinant=corr_det,
         correlation_eigenvalue_ratio=corr_ratio,
         variance_inflation_factors=vif,
+        correlation_inverse=inverse if all_ok else None,
     )

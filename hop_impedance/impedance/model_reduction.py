@@ -50,6 +50,7 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy import special
 
+from hop_impedance.impedance.diagnostics import CollinearityDiagnostics
 from hop_impedance.impedance.regression_model import TERM_NAMES
 
 #: Terms that must be eliminated before a term may be tested (polynomial hierarchy).
@@ -237,6 +238,25 @@ def _exactly_explained(X: np.ndarray) -> np.ndarray:
     return np.array(flags)
 
 
+def _certainly_full_rank_ols(design: np.ndarray, y: np.ndarray) -> _OlsDowndate | None:
+    """OLS of the whole design when its QR proves full rank, else None (then check with an SVD).
+
+    With unit columns, ``sigma_max <= ||X_s||_F = sqrt(p)`` and
+    ``sigma_min = 1 / ||R^-1||_2 >= 1 / sqrt(trace((X_s^T X_s)^-1))``, so a
+    ratio bound of at least 1e-8 (100 times the singularity threshold of
+    :func:`_scale_columns`) means the SVD check would pass: it is skipped.
+    """
+    norms = np.linalg.norm(design, axis=0)
+    if (norms == 0.0).any():
+        return None
+    try:
+        ols = _OlsDowndate(design / norms, y)
+    except np.linalg.LinAlgError:
+        return None
+    bound = 1.0 / math.sqrt(design.shape[1] * float(np.trace(ols.H)))
+    return ols if bound >= 1e-8 else None
+
+
 def _drop_exactly_collinear(
     design: np.ndarray, terms: tuple[str, ...]
 ) -> tuple[list[int], list[EliminationStep], np.ndarray, np.ndarray]:
@@ -291,7 +311,7 @@ def reduce_model(
     sse_function: Callable[[tuple[str, ...]], float] | None = None,
     effective_samples: float | None = None,
     familywise: bool = False,
-    correlation: np.ndarray | None = None,
+    diagnostics: CollinearityDiagnostics | None = None,
 ) -> ReductionResult:
     """Backward elimination of Eq. 3 terms by partial F-tests.
 
@@ -320,10 +340,10 @@ def reduce_model(
         autocorrelation of the full OLS model when None.
     familywise : bool
         Test at alpha / (number of eligible terms) (Bonferroni) per step.
-    correlation : ndarray, shape (len(terms), len(terms)), optional
-        Correlation matrix of the standardised ``term_columns`` (as in
-        ``collinearity_diagnostics(term_columns, terms).correlation_matrix``)
-        to reuse for the VIFs; computed here when None or not finite.
+    diagnostics : CollinearityDiagnostics, optional
+        ``collinearity_diagnostics(term_columns, terms)`` (same columns, no
+        custom intercept): its correlation matrix and inverse are reused for
+        the VIFs instead of being computed again (same numbers).
 
     Returns
     -------
@@ -338,12 +358,15 @@ def reduce_model(
     ones = np.ones(n) if intercept is None else np.asarray(intercept, float)
     design = np.empty((n, 1 + len(terms)))  # C order whatever the layout of term_columns
     design[:, 0], design[:, 1:] = ones, columns
-    active_positions, steps, start_design, scaled = _drop_exactly_collinear(design, terms)
+    ols = _certainly_full_rank_ols(design, y)
+    if ols is not None:
+        active_positions, steps, start_design = list(range(len(terms))), [], design
+    else:
+        active_positions, steps, start_design, scaled = _drop_exactly_collinear(design, terms)
+        ols = _OlsDowndate(scaled, y) if active_positions else None
     active = list(active_positions)  # term positions still in the model, in term order
     # design column of each term position in the OLS object (after any singular removals)
     ols_column = {position: k + 1 for k, position in enumerate(active_positions)}
-
-    ols = _OlsDowndate(scaled, y) if active else None
     n_eff = float(n)
     if effective_samples is not None:
         n_eff = float(np.clip(effective_samples, 1.0, n))
@@ -370,17 +393,25 @@ def reduce_model(
 
     # Inverse correlation matrix of the active terms: one inverse, then the
     # same partitioned-inverse downdate as the OLS path per removed term.
-    inverse: dict = {"matrix": None, "positions": None, "correlation": correlation}
+    inverse: dict = {"matrix": None, "positions": None, "correlation": None}
 
     def vifs() -> dict[int, float]:
         """VIF of each active term position."""
         if inverse["matrix"] is None:
-            if inverse["correlation"] is None or not np.isfinite(inverse["correlation"]).all():
-                inverse["correlation"] = _correlation_matrix(columns)
-            try:
-                inverse["matrix"] = np.linalg.inv(inverse["correlation"][active][:, active])
-            except np.linalg.LinAlgError:
-                return dict.fromkeys(active, math.inf)
+            given = diagnostics
+            if given is not None and given.correlation_inverse is not None and len(active) == len(terms):
+                inverse["matrix"] = given.correlation_inverse  # never modified: downdates make new arrays
+            else:
+                if inverse["correlation"] is None:
+                    inverse["correlation"] = (
+                        given.correlation_matrix
+                        if given is not None and np.isfinite(given.correlation_matrix).all()
+                        else _correlation_matrix(columns)
+                    )
+                try:
+                    inverse["matrix"] = np.linalg.inv(inverse["correlation"][active][:, active])
+                except np.linalg.LinAlgError:
+                    return dict.fromkeys(active, math.inf)
             inverse["positions"] = list(active)
         return dict(zip(inverse["positions"], np.diag(inverse["matrix"]).tolist()))
 

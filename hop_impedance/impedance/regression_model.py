@@ -37,6 +37,7 @@ no second derivative of the angle.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -247,7 +248,13 @@ def parameter_indices(terms: tuple[str, ...] | list[str]) -> np.ndarray:
     -------
     ndarray of int, shape (1 + len(terms),)
     """
+    return np.array(_parameter_index_tuple(tuple(terms)), dtype=int)
+
+
+@functools.lru_cache(maxsize=256)
+def _parameter_index_tuple(terms: tuple[str, ...]) -> tuple[int, ...]:
+    """:func:`parameter_indices` as a tuple, computed once per term tuple."""
     unknown = [name for name in terms if name not in TERM_NAMES]
     if unknown:
         raise ValueError(f"unknown impedance terms {unknown}: allowed are {TERM_NAMES}")
-    return np.array([0] + [PARAMETER_NAMES.index(name) for name in terms], dtype=int)
+    return (0,) + tuple(PARAMETER_NAMES.index(name) for name in terms)

@@ -200,9 +200,9 @@ def validate_stance(
         ("angular velocity", angular_velocity_rad_s),
         ("moment", moment_nm),
     ):
-        bad = int(np.count_nonzero(~np.isfinite(values)))
-        if bad:
-            return f"{bad} of {n} {name} samples are NaN or infinite"
+        finite = np.isfinite(values)
+        if not finite.all():
+            return f"{n - int(finite.sum())} of {n} {name} samples are NaN or infinite"
     if n < options.min_samples:
         return f"too few samples: {n} < {options.min_samples}"
     if (np.diff(time_s) <= 0.0).any():
@@ -216,7 +216,8 @@ def validate_stance(
             f"too few samples left after excluding {options.exclude_touchdown_s:.3f} s after touchdown and "
             f"{options.exclude_takeoff_s:.3f} s before take-off: {np.count_nonzero(window)} < {options.min_samples}"
         )
-    angle_range = float(np.ptp(angle_rad))
+    angle = np.asarray(angle_rad)
+    angle_range = float(angle.max() - angle.min())  # = np.ptp, without its wrapper
     if angle_range < options.min_angle_range_rad:
         return (
             f"flat angle trajectory: range {angle_range:.4f} rad < {options.min_angle_range_rad} rad, "
@@ -319,7 +320,7 @@ def fit_joint_stance(
             vif_limit=options.vif_limit,
             autocorrelation_correction=options.autocorrelation_correction,
             effective_samples=n_eff_given,
-            correlation=diagnostics.correlation_matrix,
+            diagnostics=diagnostics,
         )
         terms = reduction.terms
         n_eff = reduction.effective_samples
@@ -366,11 +367,11 @@ def fit_joint_stance(
     moment_fit = regs.moment_rows @ theta
     residual = in_window(tau - moment_fit)
     sse = float(residual @ residual)
-    sst = float(np.sum((tauw - tauw.mean()) ** 2))
+    sst = float(((tauw - tauw.mean()) ** 2).sum())
     stiffness = regs.stiffness_rows @ theta
     k_overall = overall_stiffness(rho, tau)
     moment_constant = constant_stiffness_moment(rho, tau, k_overall if math.isfinite(k_overall) else 0.0)
-    sse_constant = float(np.sum(in_window(tau - moment_constant) ** 2))
+    sse_constant = float((in_window(tau - moment_constant) ** 2).sum())
     frame_rate = (n - 1) / float(tw[-1] - tw[0])
     return JointImpedanceFit(
         status=solution.status,

@@ -51,3 +51,14 @@ def test_full_seed_model_is_collinear_and_constant_column_is_flagged():
     flat = collinearity_diagnostics(X, ("x", "const"))
     assert np.isinf(flat.variance_inflation_factors[1])
     assert flat.to_json()["variance_inflation_factors"]["const"] is None
+    assert flat.correlation_inverse is None  # R has an undefined (constant) column
+
+
+def test_correlation_inverse_is_the_inverse_and_its_diagonal_the_auxiliary_regression_vifs():
+    rng = np.random.default_rng(1)
+    base = rng.normal(size=(150, 3))
+    X = np.column_stack([base, base[:, 2] - 0.5 * base[:, 0] + 0.2 * rng.normal(size=150)])
+    d = collinearity_diagnostics(X, ("a", "b", "c", "d"))
+    np.testing.assert_allclose(d.correlation_inverse @ d.correlation_matrix, np.eye(4), atol=1e-10)
+    np.testing.assert_allclose(np.diag(d.correlation_inverse), vif_by_regression(X), rtol=1e-8)
+    assert "correlation_inverse" not in d.to_json()

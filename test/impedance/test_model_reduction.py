@@ -156,13 +156,13 @@ def test_final_f_statistics_equal_a_fresh_ols_of_the_reduced_model():
     np.testing.assert_allclose([res.f_statistics[t] for t in res.terms], want, rtol=1e-7)
 
 
-def test_given_correlation_matrix_gives_the_same_reduction():
-    """Reusing the diagnostics' correlation matrix changes nothing (also with a constant column)."""
+def test_given_diagnostics_give_the_same_reduction():
+    """Reusing the diagnostics' correlation matrix and inverse changes nothing (also with a constant column)."""
     st = synthetic_stance("knee", 1.53, np.random.default_rng(5), realistic_noise=True)
     r = stance_regressors(st.time_s, st.angle_rad, st.angular_velocity_rad_s)
     n_eff = 2 * NOISE_BANDWIDTH_HZ * 0.458
     for cols in (r.moment_rows[:, 1:], np.column_stack([r.moment_rows[:, 1:8], np.full(st.time_s.size, 2.0)])):
-        given = collinearity_diagnostics(cols, TERM_NAMES).correlation_matrix
-        reused = reduce_model(cols, st.moment_nm, effective_samples=n_eff, correlation=given)
+        given = collinearity_diagnostics(cols, TERM_NAMES)
+        reused = reduce_model(cols, st.moment_nm, effective_samples=n_eff, diagnostics=given)
         computed = reduce_model(cols, st.moment_nm, effective_samples=n_eff)
         assert repr(reused) == repr(computed)  # repr: the singular step's p-value is NaN
