@@ -44,7 +44,7 @@ SSE (e.g. constrained fits); the tests show both paths end in the same terms.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
@@ -105,6 +105,13 @@ class ReductionResult:
         n_eff used by the tests (= n without autocorrelation correction).
     alpha : float
         Significance level used.
+    ols_variance_factors : ndarray, shape (1 + len(terms),), or None
+        ``diag((X^T X)^-1)`` of the final OLS design (intercept first, then
+        ``terms``; units 1 / (N m per coefficient unit)^2), from the
+        downdated OLS path, so that standard errors need no new
+        factorisation. None with ``sse_function`` or when the final design
+        is not well conditioned (sigma_min / sigma_max bound below 1e-6).
+        Not reported.
     """
 
     terms: tuple[str, ...]
@@ -113,6 +120,7 @@ class ReductionResult:
     steps: tuple[EliminationStep, ...]
     effective_samples: float
     alpha: float
+    ols_variance_factors: np.ndarray | None = field(default=None, repr=False, compare=False)
 
 
 def effective_sample_count(residuals: np.ndarray, minimum: float) -> float:
@@ -180,9 +188,12 @@ class _OlsDowndate:
         Design divided by its column norms (unit columns).
     y : ndarray, shape (N,)
         Target.
+    norms : ndarray, shape (p,)
+        The column norms of the unscaled design.
     """
 
-    def __init__(self, scaled_design: np.ndarray, y: np.ndarray) -> None:
+    def __init__(self, scaled_design: np.ndarray, y: np.ndarray, norms: np.ndarray) -> None:
+        self.norms = norms
         Q, R = np.linalg.qr(scaled_design)
         R_inv = np.linalg.inv(R)
         self.beta = R_inv @ (Q.T @ y)
@@ -207,6 +218,18 @@ class _OlsDowndate:
         self.beta = self.beta - h * (self.beta[j] / hjj)
         self.H = _downdate_inverse(self.H, j)
         self.kept.remove(j)
+
+    def variance_factors(self, columns: list[int], min_ratio: float = 1e-6) -> np.ndarray | None:
+        """``diag((X^T X)^-1)`` of the unscaled kept ``columns``, or None when not well conditioned.
+
+        Condition guard as in :func:`_certainly_full_rank_ols`: the
+        sigma_min / sigma_max bound of the kept scaled design,
+        ``1 / sqrt(p trace(H_kept))``, must be at least ``min_ratio``.
+        """
+        h = np.diag(self.H)[columns]
+        if not 1.0 / math.sqrt(len(columns) * float(h.sum())) >= min_ratio:
+            return None
+        return h / self.norms[columns] ** 2
 
 
 def _scale_columns(X: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -250,7 +273,7 @@ def _certainly_full_rank_ols(design: np.ndarray, y: np.ndarray) -> _OlsDowndate 
     if (norms == 0.0).any():
         return None
     try:
-        ols = _OlsDowndate(design / norms, y)
+        ols = _OlsDowndate(design / norms, y, norms)
     except np.linalg.LinAlgError:
         return None
     bound = 1.0 / math.sqrt(design.shape[1] * float(np.trace(ols.H)))
@@ -363,7 +386,7 @@ def reduce_model(
         active_positions, steps, start_design = list(range(len(terms))), [], design
     else:
         active_positions, steps, start_design, scaled = _drop_exactly_collinear(design, terms)
-        ols = _OlsDowndate(scaled, y) if active_positions else None
+        ols = _OlsDowndate(scaled, y, np.linalg.norm(start_design, axis=0)) if active_positions else None
     active = list(active_positions)  # term positions still in the model, in term order
     # design column of each term position in the OLS object (after any singular removals)
     ols_column = {position: k + 1 for k, position in enumerate(active_positions)}
@@ -371,7 +394,7 @@ def reduce_model(
     if effective_samples is not None:
         n_eff = float(np.clip(effective_samples, 1.0, n))
     elif autocorrelation_correction and active:
-        beta = ols.beta / np.linalg.norm(start_design, axis=0)  # unscaled OLS coefficients
+        beta = ols.beta / ols.norms  # unscaled OLS coefficients
         n_eff = effective_sample_count(y - start_design @ beta, minimum=len(active) + 3.0)
 
     def partial_tests() -> tuple[dict[int, float], dict[int, float]]:
@@ -450,4 +473,9 @@ def reduce_model(
         steps=tuple(steps),
         effective_samples=n_eff,
         alpha=alpha,
+        ols_variance_factors=(
+            ols.variance_factors([0] + [ols_column[position[t]] for t in kept])
+            if sse_function is None and ols is not None
+            else None
+        ),
     )

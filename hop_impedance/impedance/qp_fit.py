@@ -252,7 +252,7 @@ class ConstrainedLeastSquares:
             sse=float(residual @ residual),
             iterations=int(iterations),
             polished=bool(polished),
-            n_active=int(np.sum(slack < 1e-7)) if converged else 0,
+            n_active=int((slack < 1e-7).sum()) if converged else 0,
             working_rows=working_rows,
             rounds=rounds,
         )

@@ -239,13 +239,20 @@ def _effective_samples(duration_s: float, n: int, options: FitOptions) -> float 
     return min(float(n), 2.0 * options.noise_bandwidth_hz * duration_s)
 
 
-def _standard_errors(X: np.ndarray, sse: float, n_eff: float) -> np.ndarray:
-    """OLS standard errors sqrt(sigma^2 diag((X^T X)^-1) n / n_eff) of each column."""
+def _standard_errors(X: np.ndarray, sse: float, n_eff: float, variance_factors: np.ndarray | None = None) -> np.ndarray:
+    """OLS standard errors sqrt(sigma^2 diag((X^T X)^-1) n / n_eff) of each column.
+
+    ``variance_factors`` is ``diag((X^T X)^-1)`` when already known (the
+    reduction's downdated OLS); otherwise it is computed (pseudo-inverse of
+    the column-scaled Gram matrix).
+    """
     n, p = X.shape
+    sigma2 = sse / max(n - p, 1)
+    if variance_factors is not None:
+        return np.sqrt(np.maximum(variance_factors, 0.0) * sigma2 * n / n_eff)
     norms = np.linalg.norm(X, axis=0)
     Xs = X / norms
     cov_s = np.linalg.pinv(Xs.T @ Xs)
-    sigma2 = sse / max(n - p, 1)
     return np.sqrt(np.maximum(np.diag(cov_s), 0.0) * sigma2 * n / n_eff) / norms
 
 
@@ -358,7 +365,7 @@ def fit_joint_stance(
     theta = np.zeros(len(PARAMETER_NAMES))
     theta[columns] = solution.coefficients
     names = [PARAMETER_NAMES[c] for c in columns]
-    se = _standard_errors(X, solution.sse, n_eff)
+    se = _standard_errors(X, solution.sse, n_eff, reduction.ols_variance_factors if reduction is not None else None)
     dof = n_eff - X.shape[1]
     with np.errstate(divide="ignore", invalid="ignore"):
         t_stat = solution.coefficients / se

@@ -137,7 +137,7 @@ def test_alpha_is_validated():
         reduce_model(np.ones((10, 1)), np.ones(10), terms=("k0",), alpha=1.5)
 
 
-def test_final_f_statistics_equal_a_fresh_ols_of_the_reduced_model():
+def test_final_f_statistics_and_variance_factors_equal_a_fresh_ols_of_the_reduced_model():
     """The downdated path (one QR, partitioned-inverse removals) against a refit with lstsq.
 
     Partial F of each kept term = t^2 of a fresh OLS of the reduced design,
@@ -154,6 +154,8 @@ def test_final_f_statistics_equal_a_fresh_ols_of_the_reduced_model():
     t_squared = beta**2 / np.diag(cov)
     want = t_squared[1:] * res.effective_samples / n
     np.testing.assert_allclose([res.f_statistics[t] for t in res.terms], want, rtol=1e-7)
+    # and the variance factors that the stance fit's standard errors use
+    np.testing.assert_allclose(res.ols_variance_factors, np.diag(np.linalg.inv(X.T @ X)), rtol=1e-8)
 
 
 def test_given_diagnostics_give_the_same_reduction():

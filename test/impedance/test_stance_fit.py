@@ -206,3 +206,29 @@ def test_json_of_rejected_stance():
     assert out["status"] == "rejected" and out["rejection_reason"] == "too few samples: 5 < 10"
     assert out["rmse"] is None and out["stiffness"] == []
     json.dumps(out, allow_nan=False)
+
+
+@pytest.mark.parametrize("reduce", [True, False])
+def test_standard_errors_and_p_values_against_an_independent_ols_formula(reduce):
+    """se = sqrt(sigma^2 diag((X^T X)^-1) n / n_eff), p from Student t (scipy.stats), X of the kept terms.
+
+    Both routes of the fit: the reduction's downdated (X^T X)^-1 (reduce=True)
+    and the pseudo-inverse of the kept design (reduce=False).
+    """
+    from scipy import stats
+
+    from hop_impedance.impedance.regression_model import parameter_indices, stance_regressors
+
+    st = synthetic_stance("knee", 1.53, np.random.default_rng(11), realistic_noise=True)
+    fit = fit_synthetic(st, reduce=reduce)
+    assert fit.ok and len(fit.terms) >= 2
+    r = stance_regressors(st.time_s, st.angle_rad, st.angular_velocity_rad_s)
+    X = r.moment_rows[:, parameter_indices(fit.terms)]
+    n, p = X.shape
+    sigma2 = fit.sse_variable / (n - p)
+    se = np.sqrt(np.diag(np.linalg.inv(X.T @ X)) * sigma2 * n / fit.effective_samples)
+    names = ["m0", *fit.terms]
+    np.testing.assert_allclose([fit.std_errors[k] for k in names], se, rtol=1e-7)
+    coef = np.array([fit.coefficients[k] for k in names])
+    p_values = 2 * stats.t.sf(np.abs(coef / se), fit.effective_samples - p)
+    np.testing.assert_allclose([fit.p_values[k] for k in names], p_values, rtol=1e-6)
