@@ -51,7 +51,7 @@ def constraint_rows(regressors: StanceRegressors, columns: np.ndarray) -> tuple[
             regressors.stiffness_rows[:, columns],
             regressors.damping_rows[:, columns],
             regressors.spring_energy_columns(columns),
-            regressors.damper_power_rows[:, columns],
+            regressors.damper_power_columns(columns),
         )
     )
     keep = (blocks != 0.0).any(axis=1)

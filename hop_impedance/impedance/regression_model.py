@@ -77,7 +77,8 @@ class StanceRegressors:
     moment_rows : ndarray, shape (N, 9)
         Joint moment M = M_s + M_d (N m, extensor positive), Eq. 5.
     spring_moment_rows, damper_moment_rows : ndarray, shape (N, 9)
-        M_s and M_d (N m) separately (Eq. 4 with the touchdown split above).
+        M_s and M_d (N m) separately (Eq. 4 with the touchdown split above);
+        cached properties, built on first use.
     stiffness_rows, damping_rows : ndarray, shape (N, 9)
         K (N m/rad) and B (N m s/rad), Eq. 3.
     spring_energy_rows : ndarray, shape (N, 9)
@@ -85,7 +86,8 @@ class StanceRegressors:
         its k3 column is a second numerical integral, computed only when
         used (:meth:`spring_energy_columns` gives a column subset without it).
     damper_power_rows : ndarray, shape (N, 9)
-        M_d * omega (W) = -P_d, Eq. 9 (the constraint is M_d * omega >= 0).
+        M_d * omega (W) = -P_d, Eq. 9 (the constraint is M_d * omega >= 0);
+        a cached property (:meth:`damper_power_columns` gives a column subset).
     """
 
     time_s: np.ndarray
@@ -95,16 +97,39 @@ class StanceRegressors:
     rho0_rad: float
     omega0_rad_s: float
     moment_rows: np.ndarray
-    spring_moment_rows: np.ndarray
-    damper_moment_rows: np.ndarray
     stiffness_rows: np.ndarray
     damping_rows: np.ndarray
-    damper_power_rows: np.ndarray
 
     @property
     def n_samples(self) -> int:
         """Number of samples N in the stance."""
         return int(self.time_s.shape[0])
+
+    @cached_property
+    def spring_moment_rows(self) -> np.ndarray:
+        """M_s (N m), shape (N, 9): the moment rows' spring columns m0, k0-k3 (damper columns 0)."""
+        rows = self.moment_rows.copy()
+        rows[:, _FIRST_DAMPER_COLUMN:] = 0.0
+        return rows
+
+    @cached_property
+    def damper_moment_rows(self) -> np.ndarray:
+        """M_d (N m), shape (N, 9): the moment rows' damper columns b0-b3 (spring columns 0)."""
+        rows = self.moment_rows.copy()
+        rows[:, :_FIRST_DAMPER_COLUMN] = 0.0
+        return rows
+
+    @cached_property
+    def damper_power_rows(self) -> np.ndarray:
+        """M_d * omega (W) = -P_d, Eq. 9, shape (N, 9) (the constraint is M_d * omega >= 0)."""
+        return self.damper_moment_rows * self.angular_velocity_rad_s[:, None]
+
+    def damper_power_columns(self, columns: np.ndarray) -> np.ndarray:
+        """``damper_power_rows[:, columns]`` (W per coefficient unit), shape (N, p), without the full matrix."""
+        columns = np.asarray(columns, dtype=int)
+        sub = self.moment_rows[:, columns] * self.angular_velocity_rad_s[:, None]
+        sub[:, columns < _FIRST_DAMPER_COLUMN] = 0.0
+        return sub
 
     @cached_property
     def spring_energy_rows(self) -> np.ndarray:
@@ -143,6 +168,8 @@ class StanceRegressors:
 
 #: Column of k3 in :data:`PARAMETER_NAMES` (the only spring-energy column needing an integral).
 _K3_COLUMN = PARAMETER_NAMES.index("k3")
+#: First damper column (b0) in :data:`PARAMETER_NAMES`: columns before it are spring (m0, k0-k3).
+_FIRST_DAMPER_COLUMN = PARAMETER_NAMES.index("b0")
 
 
 def cumulative_integral(values: np.ndarray, time_s: np.ndarray) -> np.ndarray:
@@ -209,13 +236,11 @@ def stance_regressors(
     int_d_domega = d * w - int_w_drho  # by parts, d(t0) = 0
 
     # M = M_s + M_d: the spring (columns 0-4) and damper (5-8) parts have
-    # disjoint columns, so each is the moment rows with the other part zeroed.
+    # disjoint columns, so each is the moment rows with the other part zeroed
+    # (StanceRegressors.spring_moment_rows, .damper_moment_rows).
     moment = np.stack(
         [np.ones(n), d, d**2 / 2, d**3 / 3, int_w_drho, omega, w**2 / 2, w**3 / 3, int_d_domega], axis=1
     )
-    spring, damper = moment.copy(), moment.copy()
-    spring[:, 5:] = 0.0
-    damper[:, :5] = 0.0
     stiffness = np.zeros((n, 9))
     stiffness[:, 1:5] = np.stack([np.ones(n), d, d**2, w], axis=1)
     damping = np.zeros((n, 9))
@@ -228,11 +253,8 @@ def stance_regressors(
         rho0_rad=float(rho[0]),
         omega0_rad_s=float(omega[0]),
         moment_rows=moment,
-        spring_moment_rows=spring,
-        damper_moment_rows=damper,
         stiffness_rows=stiffness,
         damping_rows=damping,
-        damper_power_rows=damper * omega[:, None],
     )
 
 

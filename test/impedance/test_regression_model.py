@@ -95,3 +95,13 @@ def test_parameter_indices_rejects_unknown_terms():
     assert list(parameter_indices(("k0", "b0"))) == [0, 1, 5]
     with pytest.raises(ValueError, match="unknown impedance terms"):
         parameter_indices(("k9",))
+
+
+def test_damper_power_columns_equal_the_full_rows_and_moment_halves_add_up():
+    stance = synthetic_stance("knee", 1.53, np.random.default_rng(0), realistic_noise=True)
+    r = stance_regressors(stance.time_s, stance.angle_rad, stance.angular_velocity_rad_s)
+    for terms in (("k0", "k1", "b0"), ("k0", "k3", "b1", "b2", "b3"), ("k0", "k1")):
+        columns = parameter_indices(terms)
+        np.testing.assert_array_equal(r.damper_power_columns(columns), r.damper_power_rows[:, columns])
+    np.testing.assert_array_equal(r.spring_moment_rows + r.damper_moment_rows, r.moment_rows)
+    assert not r.spring_moment_rows[:, 5:].any() and not r.damper_moment_rows[:, :5].any()
