@@ -39,6 +39,9 @@ class RecoveryResult:
         joint -> list of ``[k0, k1]`` relative errors (fraction, fit / law - 1), one per compared stance.
     infeasible : dict
         joint -> number of stances whose law breaks Eq. 7 (not compared).
+    z_scores : dict
+        joint -> list of ``[k0, k1]`` errors in units of the fit's reported standard error
+        ((fit - law) / SE); RMS near 1 means the reported uncertainty matches the scatter.
     rejected : dict
         joint -> rejection reasons of fits on compared stances (the stance is then not compared).
     fits : list
@@ -51,6 +54,7 @@ class RecoveryResult:
 
     errors: dict = field(default_factory=lambda: {j: [] for j in JOINTS})
     infeasible: dict = field(default_factory=lambda: {j: 0 for j in JOINTS})
+    z_scores: dict = field(default_factory=lambda: {j: [] for j in JOINTS})
     rejected: dict = field(default_factory=lambda: {j: [] for j in JOINTS})
     fits: list = field(default_factory=list)
     trial_medians: list = field(default_factory=list)
@@ -62,6 +66,7 @@ class RecoveryResult:
             self.errors[joint] += other.errors[joint]
             self.infeasible[joint] += other.infeasible[joint]
             self.rejected[joint] += other.rejected[joint]
+            self.z_scores[joint] += other.z_scores[joint]
         self.fits += other.fits
         self.trial_medians += other.trial_medians
         self.simulated_stances += other.simulated_stances
@@ -158,6 +163,7 @@ def recover_trial(
             else:
                 law = true["impedance"][joint]
                 result.errors[joint].append([fit.coefficients[k] / law[k] - 1.0 for k in ("k0", "k1")])
+                result.z_scores[joint].append([(fit.coefficients[k] - law[k]) / fit.std_errors[k] for k in ("k0", "k1")])
     result.trial_medians.append(
         {j: np.median(result.error_array(j), axis=0) if result.errors[j] else np.full(2, np.nan) for j in JOINTS}
     )
