@@ -163,7 +163,7 @@ def _downdate_inverse(H: np.ndarray, j: int) -> np.ndarray:
     j first, because it only reads itself, row j and column j.
     """
     h = H[:, j]
-    return H - np.outer(h, h / h[j])
+    return H - h[:, None] * (h / h[j])  # np.outer without its wrapper: the same products
 
 
 class _OlsDowndate:
@@ -206,7 +206,7 @@ class _OlsDowndate:
     def t_squared(self) -> list[float]:
         """Partial F (= t^2) of every kept column, in column order (inf for a zero variance)."""
         sigma2 = self.sse / max(self.n - len(self.kept), 1)
-        beta, h = self.beta.tolist(), np.diag(self.H).tolist()
+        beta, h = self.beta.tolist(), self.H.diagonal().tolist()
         variances = [sigma2 * h[j] for j in self.kept]
         return [beta[j] * beta[j] / var if var > 0 else math.inf for j, var in zip(self.kept, variances)]
 
@@ -226,7 +226,7 @@ class _OlsDowndate:
         sigma_min / sigma_max bound of the kept scaled design,
         ``1 / sqrt(p trace(H_kept))``, must be at least ``min_ratio``.
         """
-        h = np.diag(self.H)[columns]
+        h = self.H.diagonal()[columns]
         if not 1.0 / math.sqrt(len(columns) * float(h.sum())) >= min_ratio:
             return None
         return h / self.norms[columns] ** 2
@@ -436,13 +436,13 @@ def reduce_model(
                 except np.linalg.LinAlgError:
                     return dict.fromkeys(active, math.inf)
             inverse["positions"] = list(active)
-        return dict(zip(inverse["positions"], np.diag(inverse["matrix"]).tolist()))
+        return dict(zip(inverse["positions"], inverse["matrix"].diagonal().tolist()))
 
     position = {name: i for i, name in enumerate(terms)}
-    higher = [[position[h] for h in HIGHER_ORDER_TERMS[name] if h in position] for name in terms]
+    higher = [frozenset(position[h] for h in HIGHER_ORDER_TERMS[name] if h in position) for name in terms]
     f_eff, p_values = partial_tests() if active else ({}, {})
     while active:
-        eligible = [i for i in active if not any(h in active for h in higher[i])]
+        eligible = [i for i in active if higher[i].isdisjoint(active)]
         level = alpha / len(eligible) if familywise else alpha
         candidates = [i for i in eligible if p_values[i] > level]
         if not candidates:

@@ -240,11 +240,13 @@ class ConstrainedLeastSquares:
         A = A / np.where(row_norm > 0.0, row_norm, 1.0)[:, None]
         return X, y, Xs, ys, P, q, A, col_norm, y_norm
 
-    def _result(self, X, y, A, xs, status, iterations, polished, y_norm, col_norm, working_rows, rounds):
+    def _result(self, X, y, A, xs, status, iterations, polished, y_norm, col_norm, working_rows, rounds, slack=None):
+        """The :class:`QpSolution` of the scaled solution ``xs`` (``slack = A @ xs`` when already known)."""
         converged = status == "solved" and bool(np.isfinite(xs).all())
         theta = xs * y_norm / col_norm
         residual = y - X @ theta if np.isfinite(theta).all() else np.full_like(y, np.nan)
-        slack = A @ xs if A.shape[0] else np.zeros(0)
+        if slack is None:
+            slack = A @ xs if A.shape[0] else np.zeros(0)
         self.last_solution = QpSolution(
             coefficients=theta,
             status=status,
@@ -285,19 +287,22 @@ class ConstrainedLeastSquares:
         work = np.zeros(0, dtype=int)
         duals = np.zeros(0)
         iterations, rounds, polished = 0, 0, False
-        solver = self._small_solver(p)
-        P_upper = _upper_values(P)
+        solver = P_upper = None  # OSQP workspace and P data, fetched at the first round only
         while True:
             slack = A @ x
             tol = self.eps + self.eps * (float(np.abs(slack).max()) if slack.size else 0.0)
             violated = slack < -tol
-            violated[work] = False
+            if work.size:
+                violated[work] = False
             if not violated.any():  # W's optimum is feasible: it is the full QP's optimum
-                return self._result(X, y, A, x, "solved", iterations, polished, y_norm, col_norm, work.size, rounds)
-            if violated.any():
-                work = np.concatenate((work, _most_violated_per_run(slack, violated)))
+                return self._result(
+                    X, y, A, x, "solved", iterations, polished, y_norm, col_norm, work.size, rounds, slack=slack
+                )
+            work = np.concatenate((work, _most_violated_per_run(slack, violated)))
             if work.size > self.max_working_rows or rounds >= self.max_rounds:
                 break
+            if solver is None:
+                solver, P_upper = self._small_solver(p), _upper_values(P)
             status, x_new, duals, iters, polished = self._solve_rows(solver, P_upper, q, A[work], x, duals)
             iterations += iters
             rounds += 1
