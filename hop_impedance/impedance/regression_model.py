@@ -156,13 +156,11 @@ class StanceRegressors:
     def _spring_energy_polynomial(self) -> np.ndarray:
         """:attr:`spring_energy_rows` with the k3 column left 0: the closed-form columns, shape (N, 9)."""
         d = self.delta_angle_rad
-        rows = np.zeros((d.size, len(PARAMETER_NAMES)))
-        rows[:, :4] = np.stack([d, d**2 / 2, d**3 / 6, d**4 / 12], axis=1)
-        return rows
+        return _rows(d.size, {0: d, 1: d**2 / 2, 2: d**3 / 6, 3: d**4 / 12})
 
     @cached_property
     def _spring_energy_k3(self) -> np.ndarray:
-        """k3 column of :attr:`spring_energy_rows`, ``int (int w omega dt) omega dt`` (J per N m s/rad^2), shape (N,)."""
+        """k3 column of :attr:`spring_energy_rows`, ``int (int w omega dt) omega dt`` (J per N m s/rad^2), (N,)."""
         return cumulative_integral(self.moment_rows[:, _K3_COLUMN] * self.angular_velocity_rad_s, self.time_s)
 
 
@@ -170,6 +168,14 @@ class StanceRegressors:
 _K3_COLUMN = PARAMETER_NAMES.index("k3")
 #: First damper column (b0) in :data:`PARAMETER_NAMES`: columns before it are spring (m0, k0-k3).
 _FIRST_DAMPER_COLUMN = PARAMETER_NAMES.index("b0")
+
+
+def _rows(n: int, columns: dict[int, np.ndarray | float]) -> np.ndarray:
+    """(n, 9) rows with the given columns (index -> values or a constant) and zeros elsewhere."""
+    rows = np.zeros((n, len(PARAMETER_NAMES)))
+    for index, values in columns.items():
+        rows[:, index] = values
+    return rows
 
 
 def cumulative_integral(values: np.ndarray, time_s: np.ndarray) -> np.ndarray:
@@ -238,13 +244,11 @@ def stance_regressors(
     # M = M_s + M_d: the spring (columns 0-4) and damper (5-8) parts have
     # disjoint columns, so each is the moment rows with the other part zeroed
     # (StanceRegressors.spring_moment_rows, .damper_moment_rows).
-    moment = np.stack(
-        [np.ones(n), d, d**2 / 2, d**3 / 3, int_w_drho, omega, w**2 / 2, w**3 / 3, int_d_domega], axis=1
+    moment = _rows(
+        n, {0: 1.0, 1: d, 2: d**2 / 2, 3: d**3 / 3, 4: int_w_drho, 5: omega, 6: w**2 / 2, 7: w**3 / 3, 8: int_d_domega}
     )
-    stiffness = np.zeros((n, 9))
-    stiffness[:, 1:5] = np.stack([np.ones(n), d, d**2, w], axis=1)
-    damping = np.zeros((n, 9))
-    damping[:, 5:] = np.stack([np.ones(n), w, w**2, d], axis=1)
+    stiffness = _rows(n, {1: 1.0, 2: d, 3: d**2, 4: w})
+    damping = _rows(n, {5: 1.0, 6: w, 7: w**2, 8: d})
     return StanceRegressors(
         time_s=t,
         delta_angle_rad=d,
