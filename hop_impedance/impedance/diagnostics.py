@@ -19,9 +19,13 @@ has zero variance; standardising is what removes it from the problem).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+#: ln(10), for log10 of the Hessian determinant from slogdet's natural log.
+_LN_10 = float(np.log(10.0))
 
 
 @dataclass(frozen=True)
@@ -131,7 +135,7 @@ def _vifs_from_correlation(R: np.ndarray, eig: np.ndarray, ok: np.ndarray) -> tu
     if eig.size == 0 or eig[0] <= 1e-13 * max(eig[-1], 1.0):
         return vif, None
     inverse = np.linalg.inv(R)
-    vif[ok] = np.diag(inverse)
+    vif[ok] = inverse.diagonal()
     return vif, inverse
 
 
@@ -140,7 +144,7 @@ def _standardise(design: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     X = np.asarray(design, float)
     centred = X - X.mean(axis=0)
     norm = np.linalg.norm(centred, axis=0)
-    scale_floor = 1e-12 * max(float(np.abs(X).max(initial=0.0)), 1e-300) * np.sqrt(X.shape[0])
+    scale_floor = 1e-12 * max(float(np.abs(X).max(initial=0.0)), 1e-300) * math.sqrt(X.shape[0])
     ok = norm > scale_floor
     if ok.all():
         return centred / norm, ok
@@ -186,13 +190,13 @@ def collinearity_diagnostics(
         R[~ok, :] = np.nan
         R[:, ~ok] = np.nan
     if all_ok and X.shape[1] > 0:
-        corr_det = float(np.prod(eig))
+        corr_det = float(eig.prod())
         corr_ratio = float(eig[-1] / eig[0]) if eig[0] > 0.0 else float("inf")
     else:
         corr_det, corr_ratio = 0.0, float("inf")
     return CollinearityDiagnostics(
         terms=tuple(terms),
-        hessian_log10_determinant=float(logdet / np.log(10.0)) if sign > 0 else float("-inf"),
+        hessian_log10_determinant=float(logdet / _LN_10) if sign > 0 else float("-inf"),
         hessian_eigenvalue_ratio=_eigenvalue_ratio(H),
         correlation_matrix=R,
         correlation_determinant=corr_det,
