@@ -59,7 +59,7 @@ def main() -> None:
     parser.add_argument("--hops", type=int, default=4)
     parser.add_argument("--clean-cutoff", type=float, default=40.0, help="cut-off of the noise-free analysis (Hz)")
     parser.add_argument("--noisy-cutoff", type=float, default=12.0, help="cut-off of the noisy analysis (Hz)")
-    parser.add_argument("--edge", type=float, default=0.010, help="time left out of the fit at each stance edge (s)")
+    parser.add_argument("--edge", type=float, default=0.0, help="time left out of the fit at each stance edge (s)")
     args = parser.parse_args()
     cpu0 = time.process_time()
     with tempfile.TemporaryDirectory() as folder:

@@ -101,7 +101,7 @@ def recover_trial(
     *,
     n_hops: int = 4,
     cutoff_hz: float = 12.0,
-    edge_s: float = 0.010,
+    edge_s: float = 0.0,
     trial=None,
 ) -> RecoveryResult:
     """Simulate (or reuse ``trial``), record, analyse and fit one trial; k0/k1 errors per stance.
