@@ -15,6 +15,7 @@ rejections) and the 1-minute load average before and after.
 
     .venv/bin/python bench/bench_impedance_fit.py [--stances 300] [--rate-hz 200]
     .venv/bin/python bench/bench_impedance_fit.py --profile 200   # cProfile, 1.87 Hz, where the time goes
+    .venv/bin/python bench/bench_impedance_fit.py --slowest 3     # also: what the slowest stances' QPs did
 """
 
 from __future__ import annotations
@@ -36,8 +37,8 @@ FREQUENCIES_HZ = (1.53, 1.87, 2.20)
 
 
 def time_stances(stances: list[dict], options: FitOptions, solvers: dict) -> dict:
-    """Fit every stance (three joints); CPU and wall ms per stance and solver counts."""
-    cpu, wall, rejected, fallbacks, rounds = [], [], 0, 0, []
+    """Fit every stance (three joints); CPU and wall ms per stance, solver counts and per-stance QP details."""
+    cpu, wall, rejected, fallbacks, rounds, details = [], [], 0, 0, [], []
     for stance in stances:
         c0, w0 = time.thread_time(), time.perf_counter()
         fits = [
@@ -47,18 +48,38 @@ def time_stances(stances: list[dict], options: FitOptions, solvers: dict) -> dic
         cpu.append(time.thread_time() - c0)
         wall.append(time.perf_counter() - w0)
         rejected += sum(not f.ok for f in fits)
-        for j in JOINTS:
+        stance_details = {}
+        for j, fit in zip(stance, fits):
             last = solvers[j].last_solution
             if last is not None:
                 fallbacks += last.working_rows < 0
                 rounds.append(last.rounds)
+            stance_details[j] = _qp_detail(fit.ok, last)
+        details.append(stance_details)
     return {
         "cpu_ms": np.array(cpu) * 1e3,
         "wall_ms": np.array(wall) * 1e3,
         "rejected": rejected,
         "fallbacks": fallbacks,
         "rounds": np.array(rounds),
+        "details": details,
     }
+
+
+def _qp_detail(ok: bool, solution) -> str:
+    """How one joint's constrained fit was solved (from its QpSolution)."""
+    if not ok:
+        return "rejected"
+    if solution.working_rows < 0:
+        return f"full row set, {solution.iterations} ADMM it."
+    return f"{solution.rounds} working-set rounds ({solution.working_rows} rows), {solution.iterations} ADMM it."
+
+
+def print_slowest(result: dict, count: int) -> None:
+    """The ``count`` slowest stances (CPU ms) and what each joint's constrained fit did."""
+    for i in np.argsort(result["cpu_ms"])[::-1][:count]:
+        joints = "; ".join(f"{j}: {d}" for j, d in result["details"][i].items())
+        print(f"    stance {i}: {result['cpu_ms'][i]:.2f} ms CPU; {joints}")
 
 
 def profile(n_stances: int, options: FitOptions, rate_hz: float) -> None:
@@ -80,6 +101,7 @@ def main() -> None:
     parser.add_argument("--stances", type=int, default=300, help="stances per frequency")
     parser.add_argument("--rate-hz", type=float, default=200.0, help="sample rate of the stance arrays (Hz)")
     parser.add_argument("--profile", type=int, default=0, help="profile this many 1.87 Hz stances instead of timing")
+    parser.add_argument("--slowest", type=int, default=0, help="also print this many slowest stances per frequency")
     args = parser.parse_args()
     options = FitOptions(noise_bandwidth_hz=12.0)
     if args.profile:
@@ -103,6 +125,8 @@ def main() -> None:
             f"(goal < 5 ms); working-set rounds median {np.median(r['rounds']):.0f} max {r['rounds'].max()}, "
             f"full-row fallbacks {r['fallbacks']}, rejected joint fits {r['rejected']}"
         )
+        if args.slowest:
+            print_slowest(r, args.slowest)
     print(f"load average (1 min) after: {os.getloadavg()[0]:.2f}")
 
 
