@@ -212,6 +212,24 @@ def test_variable_model_beats_constant_model_end_to_end(simulated_trial):
         assert variable < factor * constant, (joint, variable, constant)
 
 
+@pytest.mark.slow
+def test_damping_is_negligible_end_to_end(simulated_trial):
+    """Seed finding, noisy data: damping below 0.72 N m s/rad and its moment a few % of the net moment.
+
+    The simulated law has b0 = 0.5 N m s/rad; per joint, the median over the pooled stances of the fitted b0
+    must stay under the seed's bound 0.72, and the median damper share max|b0 omega| / max|M| under its 6 %.
+    """
+    for joint in JOINTS:
+        fits = [f[joint] for f in simulated_trial["noisy"].fits if f[joint].ok]
+        b0 = np.array([f.coefficients["b0"] for f in fits])
+        share = [
+            f.coefficients["b0"] * np.abs(np.gradient(f.angle_rad, f.time_s)).max() / np.abs(f.moment_nm).max()
+            for f in fits
+        ]
+        assert 0.0 <= np.median(b0) < 0.72, (joint, b0)
+        assert np.median(share) < 0.06, (joint, share)
+
+
 BUNDLED_HARD = [RECORDINGS / f"sim_{f}hz_hard.mcap" for f in ("1p53", "1p87", "2p20")]
 
 
