@@ -75,7 +75,9 @@ class EliminationStep:
     term : str
         Removed term.
     reason : str
-        ``"not significant"``, ``"collinear"`` or ``"singular"``.
+        ``"not significant"``, ``"collinear"`` or ``"singular"``; after the
+        constrained fit, ``fit_joint_stance`` may add ``"held at zero by the
+        constraints"`` (p = 1, F = 0, vif NaN).
     p_value, f_statistic : float
         Partial F-test of the term in the model it was removed from.
     vif : float

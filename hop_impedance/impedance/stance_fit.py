@@ -20,7 +20,7 @@ Pipeline of :func:`fit_joint_stance`:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import special
@@ -32,7 +32,7 @@ from hop_impedance.impedance.constant_stiffness import (
 )
 from hop_impedance.impedance.constraints import constraint_rows
 from hop_impedance.impedance.diagnostics import CollinearityDiagnostics, collinearity_diagnostics
-from hop_impedance.impedance.model_reduction import ReductionResult, reduce_model
+from hop_impedance.impedance.model_reduction import HIGHER_ORDER_TERMS, EliminationStep, ReductionResult, reduce_model
 from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares
 from hop_impedance.impedance.regression_model import (
     INTERCEPT_NAME,
@@ -256,6 +256,58 @@ def _standard_errors(X: np.ndarray, sse: float, n_eff: float, variance_factors: 
     return np.sqrt(np.maximum(np.diag(cov_s), 0.0) * sigma2 * n / n_eff) / norms
 
 
+#: Reason of an :class:`EliminationStep` that removes a term the constraints hold at zero.
+HELD_AT_ZERO = "held at zero by the constraints"
+#: A term's largest moment contribution, relative to the largest |moment|, below which it counts as zero.
+_ZERO_CONTRIBUTION = 1e-7
+
+
+def _drop_terms_held_at_zero(terms, moment_rows, tau, regs, solver, solution, reduction):
+    """Remove reduced-model terms that the constraints (Eqs. 7-9) hold at zero; refit.
+
+    The F-tests run on the unconstrained (OLS) fit. When muscles put energy
+    in during stance (a push-off), the OLS damping is significantly
+    *negative*; the F-test keeps it and the constraint B >= 0 then holds it
+    at exactly 0. Such a term contributes nothing to the constrained fit:
+    removing it leaves the constrained SSE unchanged (its constrained partial
+    F is 0, p = 1), so it is removed, one at a time, last-eligible first
+    under the polynomial hierarchy, as long as the refit's SSE stays the
+    same (1e-6 relative) and a stiffness term remains.
+
+    Returns
+    -------
+    (terms, solution, reduction) after the removals (unchanged when none).
+    """
+    scale = float(np.max(np.abs(tau))) or 1.0
+    while True:
+        columns = parameter_indices(terms)
+        X = moment_rows[:, columns]
+        contribution = np.abs(solution.coefficients[1:]) * np.max(np.abs(X[:, 1:]), axis=0)
+        held = [
+            name
+            for name, c in zip(terms, contribution)
+            if c <= _ZERO_CONTRIBUTION * scale and not any(h in terms for h in HIGHER_ORDER_TERMS[name])
+        ]
+        remaining = tuple(t for t in terms if t != (held[-1] if held else None))
+        if not held or not any(t.startswith("k") for t in remaining):
+            return terms, solution, reduction
+        new_columns = parameter_indices(remaining)
+        A, _ = constraint_rows(regs, new_columns)
+        refit = solver.solve(moment_rows[:, new_columns], tau, A)
+        if not refit.converged or refit.sse > solution.sse * (1.0 + 1e-6) + 1e-12:
+            return terms, solution, reduction
+        step = EliminationStep(held[-1], HELD_AT_ZERO, 1.0, 0.0, float("nan"))
+        reduction = replace(
+            reduction,
+            terms=remaining,
+            steps=reduction.steps + (step,),
+            p_values={k: v for k, v in reduction.p_values.items() if k != held[-1]},
+            f_statistics={k: v for k, v in reduction.f_statistics.items() if k != held[-1]},
+            ols_variance_factors=None,
+        )
+        terms, solution = remaining, refit
+
+
 def fit_joint_stance(
     time_s: np.ndarray,
     angle_rad: np.ndarray,
@@ -361,6 +413,11 @@ def fit_joint_stance(
         return _rejected(
             f"OSQP did not converge: status '{solution.status}'", status=solution.status, terms=terms, **common
         )
+    if reduction is not None:
+        terms, solution, reduction = _drop_terms_held_at_zero(terms, moment_rows, tauw, regs, solver, solution, reduction)
+        common["reduction"] = reduction
+        columns = parameter_indices(terms)
+        X = moment_rows[:, columns]
 
     theta = np.zeros(len(PARAMETER_NAMES))
     theta[columns] = solution.coefficients
