@@ -419,28 +419,51 @@ class ConstrainedLeastSquares:
         shape = (p, A.shape[0])
         if self._solver is not None and self._shape == shape:
             self._solver.update(Px=P_csc.data, q=q, Ax=A_csc.data, l=lower, u=upper)
-            self._solver.update_settings(polishing=not ols_feasible)
         else:
             self._solver = osqp.OSQP(algebra=OSQP_ALGEBRA)
-            self._solver.setup(P_csc, q, A_csc, lower, upper, **{**self.settings, "polishing": not ols_feasible})
+            self._solver.setup(P_csc, q, A_csc, lower, upper, **{**self.settings, "polishing": False})
             self._shape = shape
         if ols_feasible or p not in self._last_x:
             self._solver.warm_start(x=x_ols)
         else:
             self._solver.warm_start(x=self._last_x[p])
-        # Two stages: a coarse ADMM solve identifies the active set and OSQP's
-        # polishing then solves the reduced KKT system exactly (fast, exact);
-        # only if polishing fails is ADMM continued (warm) to the tight tolerance.
-        self._solver.update_settings(eps_abs=self.coarse_eps, eps_rel=self.coarse_eps)
-        result = self._solver.solve(raise_error=False)
-        exact = ols_feasible or int(result.info.status_polish) == 1
-        if str(result.info.status) != "solved" or not exact:
-            self._solver.update_settings(eps_abs=self.settings["eps_abs"], eps_rel=self.settings["eps_rel"])
-            result = self._solver.solve(raise_error=False)
+        result, iterations = self._solve_all_rows_in_stages(A, ols_feasible)
         status = str(result.info.status)
         xs = np.asarray(result.x, float)
         if status == "solved" and np.isfinite(xs).all():
             self._last_x[p] = xs.copy()
         return self._result(
-            X, y, A, xs, status, result.info.iter, int(result.info.status_polish) == 1, y_norm, col_norm, -1, 0
+            X, y, A, xs, status, iterations, int(result.info.status_polish) == 1, y_norm, col_norm, -1, 0
         )
+
+    def _solve_all_rows_in_stages(self, rows: np.ndarray, ols_feasible: bool):
+        """ADMM to ``coarse_eps``, then to ``eps``; polish at a stage only once its iterate shows an active row.
+
+        A feasible unconstrained optimum is accepted from the first stage (no
+        active row, nothing to polish). Otherwise a stage's iterate is
+        polished (exact KKT solution of its active set; OSQP continues from
+        the iterate, warm) only when OSQP's own rule would find an active row
+        there (:func:`_shows_active_row`): polishing without one makes OSQP
+        1.1 print "Polishing not needed ..." on stdout from C, which would
+        corrupt ``analyze --json -``. An exact polished solve ends the stages.
+
+        Returns
+        -------
+        (result, iterations): OSQP's last result and the ADMM iterations of all solves.
+        """
+        result, iterations = None, 0
+        for eps in (self.coarse_eps, self.settings["eps_abs"]):
+            self._solver.update_settings(eps_abs=eps, eps_rel=eps, polishing=False)
+            result = self._solver.solve(raise_error=False)
+            iterations += int(result.info.iter)
+            if str(result.info.status) != "solved":
+                continue
+            if ols_feasible:
+                break
+            if _shows_active_row(rows, result.x, result.y):
+                self._solver.update_settings(polishing=True)
+                result = self._solver.solve(raise_error=False)
+                iterations += int(result.info.iter)
+                if str(result.info.status) == "solved" and int(result.info.status_polish) == 1:
+                    break
+        return result, iterations

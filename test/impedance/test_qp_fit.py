@@ -198,3 +198,30 @@ def test_fits_print_nothing_on_stdout(capfd):
                 st.time_s, st.angle_rad, st.angular_velocity_rad_s, st.moment_nm, FitOptions(noise_bandwidth_hz=12.0), solver
             )
     assert capfd.readouterr().out == ""
+
+
+#: (frequency, seed, joint, extra term): fits with terms k0, k1, b0 + extra whose working set fell back to
+#: the full row set and whose polishing there found no active row (OSQP printed "Polishing not needed").
+FULL_ROW_FALLBACK_CASES = [(1.53, 55, "ankle", "b3"), (2.20, 2, "knee", "b3"), (2.20, 50, "ankle", "b1"), (2.20, 73, "knee", "b3")]
+
+
+@pytest.mark.parametrize("freq,seed,joint,extra", FULL_ROW_FALLBACK_CASES)
+def test_full_row_fallback_prints_nothing_and_is_optimal(capfd, freq, seed, joint, extra):
+    """The full-row path polishes only once an active row shows (``analyze --json -`` writes JSON on stdout)."""
+    from hop_impedance.impedance.stance_fit import FitOptions, fit_joint_stance
+
+    st = synthetic_stance(joint, freq, np.random.default_rng(seed), realistic_noise=True)
+    terms = ("k0", "k1", "b0", extra)
+    solver = ConstrainedLeastSquares()
+    fit = fit_joint_stance(
+        st.time_s, st.angle_rad, st.angular_velocity_rad_s, st.moment_nm,
+        FitOptions(noise_bandwidth_hz=12.0, reduce=False, terms=terms), solver,
+    )
+    assert capfd.readouterr().out == ""
+    assert fit.ok and solver.last_solution.working_rows == -1  # the case still exercises the fallback
+    # Optimal: the independent dense solver of the cross-check (SLSQP) reaches no lower SSE.
+    regs = stance_regressors(st.time_s, st.angle_rad, st.angular_velocity_rad_s)
+    X = regs.moment_rows[:, parameter_indices(terms)]
+    A, _ = constraint_rows(regs, parameter_indices(terms))
+    reference = fit_by_slsqp(X, st.moment_nm, A)
+    assert fit.sse_variable <= float(np.sum((st.moment_nm - X @ reference) ** 2)) * (1 + 1e-6)
