@@ -223,7 +223,22 @@ def validate_stance(
             f"flat angle trajectory: range {angle_range:.4f} rad < {options.min_angle_range_rad} rad, "
             "stiffness regressors are singular"
         )
+    if not np.asarray(moment_nm)[window].any():
+        return "moment is zero at every fitted sample: nothing to fit (force plate or inverse dynamics output missing?)"
     return None
+
+
+def _zero_regressor_reason(X: np.ndarray, terms: tuple[str, ...]) -> str | None:
+    """Why a given model cannot be fitted: term columns of the design ``X`` (intercept first) that are all zero.
+
+    Happens with ``reduce=False`` when a term's regressor vanishes on this
+    stance, e.g. every ``omega - omega0`` term when the angular velocity is
+    constant; the reduction would remove such a term as singular.
+    """
+    zero = [name for name, column in zip(terms, X[:, 1:].T) if not column.any()]
+    if not zero:
+        return None
+    return f"regressor of {', '.join(zero)} is zero at every sample: the given model is singular on this stance"
 
 
 def fit_window(time_s: np.ndarray, options: FitOptions) -> np.ndarray:
@@ -407,6 +422,9 @@ def fit_joint_stance(
         )
     columns = parameter_indices(terms)
     X = moment_rows[:, columns]
+    singular = _zero_regressor_reason(X, terms)
+    if singular is not None:
+        return _rejected(singular, terms=terms, **common)
     A, _ = constraint_rows(regs, columns)
     solution = solver.solve(X, tauw, A)
     if not solution.converged:

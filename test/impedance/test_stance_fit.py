@@ -150,6 +150,27 @@ class TestRejections:
         fit = self.fit(st.time_s, np.full(n, 2.0), np.zeros(n), st.moment_nm)
         assert fit.rejection_reason.startswith("flat angle trajectory")
 
+    def test_zero_moment(self):
+        """A joint moment that is 0 everywhere (no force data reached the ID) is rejected, not a ValueError."""
+        st = self.good()
+        fit = self.fit(st.time_s, st.angle_rad, st.angular_velocity_rad_s, np.zeros_like(st.moment_nm))
+        assert fit.rejection_reason.startswith("moment is zero at every fitted sample")
+
+    def test_given_model_with_a_vanishing_regressor(self):
+        """Constant angular velocity: every omega - omega0 term is 0. With reduce=False (model given) that is a
+        rejection naming the terms; with the reduction they are removed as singular and the fit goes on."""
+        t = np.linspace(0.0, 0.25, 60)
+        rho = 1.0 + 0.8 * t
+        omega = np.full_like(t, 0.8)
+        moment = 3.0 + 100.0 * (rho - rho[0])
+        given = fit_joint_stance(t, rho, omega, moment, FitOptions(reduce=False, terms=("k0", "k1", "k3", "b0", "b1")))
+        assert given.rejection_reason == (
+            "regressor of k3, b1 is zero at every sample: the given model is singular on this stance"
+        )
+        reduced = fit_joint_stance(t, rho, omega, moment, FitOptions(terms=("k0", "k1", "k3", "b0", "b1")))
+        assert reduced.ok and "k3" not in reduced.terms and "b1" not in reduced.terms
+        assert reduced.coefficients["k0"] == pytest.approx(100.0, rel=1e-3)
+
     def test_non_increasing_time(self):
         st = self.good()
         t = st.time_s.copy()
