@@ -105,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
 
     from hop_impedance.biomech.analysis import AnalysisOptions, analysis_to_json, analyze_recording
     from hop_impedance.biomech.body_model import load_overrides
+    from hop_impedance.cli.json_output import json_output
     from hop_impedance.impedance.report import fit_records, write_report
     from hop_impedance.io.recording_io import load_recording
 
@@ -116,28 +117,24 @@ def run(args: argparse.Namespace) -> int:
         max_gap_s=args.max_gap_s,
         overrides=load_overrides(args.segments) if args.segments else None,
     )
-    docs, records, conditions = [], [], []
-    for path in args.recordings:
-        rec = load_recording(path)
-        rec = replace(rec, subject=_subject(rec, args, path))
-        analysis = analyze_recording(rec, options)
-        doc = analysis_to_json(analysis)
-        if not args.no_fit:
-            fits = add_fits_to_json(doc, analysis)
-            label = condition_label(analysis, path, conditions)
-            conditions.append(label)
-            records += fit_records(fits, label, analysis.subject.subject_id)
-        docs.append(doc)
-    if args.report:
-        written = write_report(records, conditions, args.report)
-        print(f"hop-impedance analyze: report ({len(written)} files) -> {args.report}", file=sys.stderr)
-    doc = docs[0] if len(docs) == 1 else docs
-    text = json.dumps(doc, indent=args.indent, allow_nan=False)
-    if args.json == "-":
-        sys.stdout.write(text + "\n")
-    else:
-        with open(args.json, "w", encoding="utf-8") as fh:
-            fh.write(text + "\n")
+    with json_output(args.json) as write_json:
+        docs, records, conditions = [], [], []
+        for path in args.recordings:
+            rec = load_recording(path)
+            rec = replace(rec, subject=_subject(rec, args, path))
+            analysis = analyze_recording(rec, options)
+            doc = analysis_to_json(analysis)
+            if not args.no_fit:
+                fits = add_fits_to_json(doc, analysis)
+                label = condition_label(analysis, path, conditions)
+                conditions.append(label)
+                records += fit_records(fits, label, analysis.subject.subject_id)
+            docs.append(doc)
+        if args.report:
+            written = write_report(records, conditions, args.report)
+            print(f"hop-impedance analyze: report ({len(written)} files) -> {args.report}", file=sys.stderr)
+        doc = docs[0] if len(docs) == 1 else docs
+        write_json(json.dumps(doc, indent=args.indent, allow_nan=False))
     stances = [s for d in docs for s in d["stances"]]
     n = len(stances)
     ok = sum(1 for s in stances if s["joints"] is not None)

@@ -30,19 +30,16 @@ def run(args) -> int:
     import json
     import sys
 
+    from hop_impedance.cli.json_output import json_output
     from hop_impedance.discovery.report import to_json_ready
     from hop_impedance.discovery.workflow import discover
     from hop_impedance.io.recording_io import load_recording
 
     rec = load_recording(args.recording, require_markers=True)
-    doc = discover(rec, max_steps=args.max_steps)
-    doc["recording"] = str(args.recording)
-    text = json.dumps(to_json_ready(doc), indent=args.indent, allow_nan=False)
-    if args.json == "-":
-        sys.stdout.write(text + "\n")
-    else:
-        with open(args.json, "w", encoding="utf-8") as fh:
-            fh.write(text + "\n")
+    with json_output(args.json) as write_json:
+        doc = discover(rec, max_steps=args.max_steps)
+        doc["recording"] = str(args.recording)
+        write_json(json.dumps(to_json_ready(doc), indent=args.indent, allow_nan=False))
     if args.report:
         from hop_impedance.discovery.report import write_figures
 
