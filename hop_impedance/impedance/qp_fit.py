@@ -32,8 +32,7 @@ it is returned without calling OSQP (``rounds = 0``, ``working_rows = 0``,
 ``iterations = 0``). OSQP solves every QP with a non-empty working set (it is
 the solver of record for every fit where a constraint binds). If W would exceed ``max_working_rows``, the loop exceeds
 ``max_rounds``, or a working-set solve does not converge, the full row set is
-solved as before (:meth:`ConstrainedLeastSquares.solve_all_rows`: ADMM to
-``coarse_eps`` + polishing, else ADMM to ``eps``), so a stance is rejected
+solved as before (:meth:`ConstrainedLeastSquares.solve_all_rows`), so a stance is rejected
 only when OSQP fails on the full problem. Only OSQP status ``solved`` counts as
 converged; anything else ("solved inaccurate", "maximum iterations reached",
 ...) is reported so the caller can reject the stance. ``theta = 0`` satisfies
@@ -179,10 +178,16 @@ class ConstrainedLeastSquares:
         feasibility tolerance of the working-set check).
     max_iter : int
         OSQP iteration limit per solve; reaching it is reported as not converged.
-    coarse_eps : float
-        Tolerance of the first ADMM stage, whose result is accepted only when
-        OSQP's polishing succeeds (exact active-set solution) or no
-        constraint is active; otherwise ADMM continues to ``eps``.
+    coarse_eps, middle_eps : float
+        Tolerances of the first two ADMM stages. Each stage's iterate is
+        polished (exact active-set solution) when it shows an active row and
+        accepted when the polish succeeds; otherwise ADMM continues, warm, to
+        the next stage and finally to ``eps``. Result-neutral (a successful
+        polish is the exact optimum whichever stage it comes from); the middle
+        stage exists for speed: where the coarse iterate has not yet
+        identified the active set, two orders of magnitude later it usually
+        has, instead of ADMM running on to ``eps`` (docs/impedance_model.md,
+        "Speed", ``bench_impedance_fit.py --slowest``).
     working_set : bool
         Use the working-set path (module docstring); False always solves the
         full row set.
@@ -197,12 +202,15 @@ class ConstrainedLeastSquares:
         eps: float = 1e-9,
         max_iter: int = 20000,
         coarse_eps: float = 1e-5,
+        middle_eps: float = 1e-7,
         working_set: bool = True,
         max_working_rows: int = 16,
         max_rounds: int = 12,
     ) -> None:
         self.eps = eps
         self.coarse_eps = coarse_eps
+        #: ADMM tolerances of the successive stages (see the class docstring).
+        self.stages = tuple(e for e in (coarse_eps, middle_eps) if e > eps) + (eps,)
         self.working_set = working_set
         self.max_working_rows = max_working_rows
         self.max_rounds = max_rounds
@@ -342,12 +350,12 @@ class ConstrainedLeastSquares:
     def _solve_rows(self, solver, P_upper, q, rows, x0, y0):
         """One OSQP solve of the scaled QP with ``rows @ x >= 0`` (padded with free rows).
 
-        Two stages as in :meth:`solve_all_rows`: ADMM to ``coarse_eps``, then
+        Stages as in :meth:`solve_all_rows` (:attr:`stages`): ADMM to ``coarse_eps``, then
         polishing (exact KKT solution of the identified active set), accepted
         when polishing succeeded and every multiplier has the sign of an
         active lower bound (OSQP's y <= 0; a positive y means a wrongly
         guessed active row, i.e. a feasible but not optimal point); otherwise
-        the same at ``eps``. The working set is never empty here (its first
+        the same at the next stage. The working set is never empty here (its first
         rows are violated by the unconstrained optimum), so its exact optimum
         always has an active row.
 
@@ -377,14 +385,14 @@ class ConstrainedLeastSquares:
         y_start[: y0.size] = y0
         solver.warm_start(x=x0, y=y_start)
         iterations, status, polished = 0, "not solved", False
-        for eps in (self.coarse_eps, self.eps):
+        for eps in self.stages:
             self._set(p, polishing=False, eps=eps)
             result = solver.solve(raise_error=False)
             iterations += int(result.info.iter)
             status = str(result.info.status)
             if status != "solved" or not _shows_active_row(rows, result.x, result.y[:k]):
                 continue
-            self._set(p, polishing=True, eps=eps)
+            self._set(p, polishing=True, eps=self.coarse_eps)  # converged iterate: ADMM stops at once, then polish
             result = solver.solve(raise_error=False)
             iterations += int(result.info.iter)
             status = str(result.info.status)
@@ -437,7 +445,7 @@ class ConstrainedLeastSquares:
         )
 
     def _solve_all_rows_in_stages(self, rows: np.ndarray, ols_feasible: bool):
-        """ADMM to ``coarse_eps``, then to ``eps``; polish at a stage only once its iterate shows an active row.
+        """ADMM through :attr:`stages`; polish at a stage only once its iterate shows an active row.
 
         A feasible unconstrained optimum is accepted from the first stage (no
         active row, nothing to polish). Otherwise a stage's iterate is
@@ -452,7 +460,7 @@ class ConstrainedLeastSquares:
         (result, iterations): OSQP's last result and the ADMM iterations of all solves.
         """
         result, iterations = None, 0
-        for eps in (self.coarse_eps, self.settings["eps_abs"]):
+        for eps in self.stages:
             self._solver.update_settings(eps_abs=eps, eps_rel=eps, polishing=False)
             result = self._solver.solve(raise_error=False)
             iterations += int(result.info.iter)

@@ -200,8 +200,9 @@ def test_fits_print_nothing_on_stdout(capfd):
     assert capfd.readouterr().out == ""
 
 
-#: (frequency, seed, joint, extra term): fits with terms k0, k1, b0 + extra whose working set fell back to
-#: the full row set and whose polishing there found no active row (OSQP printed "Polishing not needed").
+#: (frequency, seed, joint, extra term): fits with terms k0, k1, b0 + extra whose full-row solve polished
+#: where no row was active (OSQP printed "Polishing not needed"); found as working-set fallbacks, solved here
+#: on the full row set directly.
 FULL_ROW_FALLBACK_CASES = [(1.53, 55, "ankle", "b3"), (2.20, 2, "knee", "b3"), (2.20, 50, "ankle", "b1"), (2.20, 73, "knee", "b3")]
 
 
@@ -212,13 +213,13 @@ def test_full_row_fallback_prints_nothing_and_is_optimal(capfd, freq, seed, join
 
     st = synthetic_stance(joint, freq, np.random.default_rng(seed), realistic_noise=True)
     terms = ("k0", "k1", "b0", extra)
-    solver = ConstrainedLeastSquares()
+    solver = ConstrainedLeastSquares(working_set=False)
     fit = fit_joint_stance(
         st.time_s, st.angle_rad, st.angular_velocity_rad_s, st.moment_nm,
         FitOptions(noise_bandwidth_hz=12.0, reduce=False, terms=terms), solver,
     )
     assert capfd.readouterr().out == ""
-    assert fit.ok and solver.last_solution.working_rows == -1  # the case still exercises the fallback
+    assert fit.ok and solver.last_solution.working_rows == -1
     # Optimal: the independent dense solver of the cross-check (SLSQP) reaches no lower SSE.
     regs = stance_regressors(st.time_s, st.angle_rad, st.angular_velocity_rad_s)
     X = regs.moment_rows[:, parameter_indices(terms)]
