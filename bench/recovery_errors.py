@@ -36,7 +36,7 @@ def pooled_results(freq_hz: float, seeds: list[int], args, folder: Path) -> dict
         trial = simulate_law_trial(freq_hz, seed, args.hops)
         for label, noisy, cutoff in (("clean", False, args.clean_cutoff), ("noisy", True, args.noisy_cutoff)):
             out[label].extend(recover_trial(freq_hz, seed, noisy, folder, n_hops=args.hops, cutoff_hz=cutoff,
-                                            edge_s=args.edge, trial=trial))
+                                            edge_s=args.edge, skip_first=args.skip_first, trial=trial))
     return out
 
 
@@ -59,6 +59,7 @@ def main() -> None:
     parser.add_argument("--hops", type=int, default=4)
     parser.add_argument("--clean-cutoff", type=float, default=40.0, help="cut-off of the noise-free analysis (Hz)")
     parser.add_argument("--noisy-cutoff", type=float, default=12.0, help="cut-off of the noisy analysis (Hz)")
+    parser.add_argument("--skip-first", type=int, default=0, help="simulated stances left out at the start of each trial")
     parser.add_argument("--edge", type=float, default=0.0, help="time left out of the fit at each stance edge (s)")
     args = parser.parse_args()
     cpu0 = time.process_time()

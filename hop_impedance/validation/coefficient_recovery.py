@@ -102,6 +102,7 @@ def recover_trial(
     n_hops: int = 4,
     cutoff_hz: float = 12.0,
     edge_s: float = 0.0,
+    skip_first: int = 0,
     trial=None,
 ) -> RecoveryResult:
     """Simulate (or reuse ``trial``), record, analyse and fit one trial; k0/k1 errors per stance.
@@ -152,7 +153,7 @@ def recover_trial(
     truth_by_touchdown = {round(s["touchdown_s"], 2): s for s in truth["stances"]}
     for stance, stance_fits in zip(analysis.stances, fits):
         true = truth_by_touchdown.get(round(stance.touchdown_s, 2))
-        if true is None or stance.rejection_reason is not None:
+        if true is None or stance.rejection_reason is not None or true["index"] < skip_first:
             continue
         for j, joint in enumerate(JOINTS):
             fit = stance_fits[joint]
