@@ -44,7 +44,9 @@ A stance whose window has a hole in the force samples (a step longer than
 (a step longer than ``max_gap_s`` + one frame) is still emitted with its
 force-based figures, but its joint data are dropped and the rejection
 reason names the number of missing samples; it is never silently analysed
-on incomplete data.
+on incomplete data. Periods are the streams' nominal ones, from their first
+50 time steps (:class:`NominalPeriod`), not the window's median step, which
+loss spread over the whole window turns into a gap.
 """
 
 from __future__ import annotations
@@ -116,6 +118,8 @@ class StanceAnalysisStage:
         self._markers: list[np.ndarray] = []
         self._last_touchdown_s = np.nan
         self._next = 0  # index of the next stance to emit
+        self._force_period = NominalPeriod()
+        self._marker_period = NominalPeriod()
 
     def push(
         self,
@@ -134,9 +138,11 @@ class StanceAnalysisStage:
         if markers is not None and len(markers[0]):
             self._marker_t.append(np.asarray(markers[0], float))
             self._markers.append(np.asarray(markers[1], float))
+            self._marker_period.update(self._marker_t[-1])
         if force is not None and len(force[0]):
             t, w = np.asarray(force[0], float), np.asarray(force[1], float)
             self._force_t.append(t)
+            self._force_period.update(t)
             self._wrench.append(w)
             for ev in self.detector.push(t, w[:, 1]):
                 if ev.kind == "touchdown":
@@ -210,7 +216,10 @@ class StanceAnalysisStage:
         Loss is named first even when the analysis already rejected the stance
         for a reason the loss caused (e.g. too few force samples left in it).
         """
-        reason = missing_samples_reason(data, result.touchdown_s, result.takeoff_s, self.options.max_gap_s)
+        reason = missing_samples_reason(
+            data, result.touchdown_s, result.takeoff_s, self.options.max_gap_s,
+            force_period_s=self._force_period.value, marker_period_s=self._marker_period.value,
+        )
         if reason is not None:
             earlier = result.rejection_reason
             result.rejection_reason = reason if earlier is None else f"{reason}; {earlier}"
@@ -263,7 +272,46 @@ def pending_stance(detector: StanceDetector) -> Stance | None:
     return detector.pending_stance
 
 
-def missing_samples_reason(data: SpanData, touchdown_s: float, takeoff_s: float, max_gap_s: float) -> str | None:
+#: Time steps at the start of a stream that set its nominal sampling period.
+NOMINAL_PERIOD_STEPS = 50
+
+
+class NominalPeriod:
+    """Sampling period of a stream, from its first :data:`NOMINAL_PERIOD_STEPS` time steps (s).
+
+    A window's own median step is no estimate once most of its messages are
+    lost (at 500x replay 195 of ~200 force samples of a stance went missing,
+    the window's median step was then a gap and the holes went unseen). The
+    stream's start, before any overload, gives the nominal period, as the
+    node's input tracker does (nodes/common.py).
+    """
+
+    def __init__(self) -> None:
+        self._steps: list[float] = []
+        self._last_t: float | None = None
+        #: The nominal period (s), or None until enough steps were seen.
+        self.value: float | None = None
+
+    def update(self, t_s: np.ndarray) -> None:
+        """Take the steps of a chunk of increasing times ``t_s`` (s) until the period is known."""
+        if self.value is not None or len(t_s) == 0:
+            return
+        t = np.asarray(t_s, float) if self._last_t is None else np.concatenate([[self._last_t], t_s])
+        self._steps.extend(float(v) for v in np.diff(t) if v > 0)
+        self._last_t = float(t[-1])
+        if len(self._steps) >= NOMINAL_PERIOD_STEPS:
+            self.value = float(np.median(self._steps[:NOMINAL_PERIOD_STEPS]))
+            self._steps = []
+
+
+def missing_samples_reason(
+    data: SpanData,
+    touchdown_s: float,
+    takeoff_s: float,
+    max_gap_s: float,
+    force_period_s: float | None = None,
+    marker_period_s: float | None = None,
+) -> str | None:
     """Why a stance's data have holes from lost messages, or None.
 
     Parameters
@@ -274,6 +322,9 @@ def missing_samples_reason(data: SpanData, touchdown_s: float, takeoff_s: float,
         Stance events (s, same clock).
     max_gap_s : float
         Longest marker-frame gap the kinematics bridges (s).
+    force_period_s, marker_period_s : float, optional
+        Nominal sampling periods (s) of the streams (:class:`NominalPeriod`);
+        default: the median step of the window, which heavy loss inflates.
 
     Returns
     -------
@@ -288,17 +339,19 @@ def missing_samples_reason(data: SpanData, touchdown_s: float, takeoff_s: float,
     samples. Markers: steps longer than ``max_gap_s`` + one frame period in
     the same interval extended by one frame on each side.
     """
-    reason = _hole_reason(data.force_t_s, touchdown_s, takeoff_s, 1.5, 0.0, "force")
+    reason = _hole_reason(data.force_t_s, touchdown_s, takeoff_s, 1.5, 0.0, "force", force_period_s)
     if reason is None and data.marker_t_s is not None and len(data.marker_t_s) > 2:
-        dt = float(np.median(np.diff(data.marker_t_s)))
-        reason = _hole_reason(data.marker_t_s, touchdown_s - dt, takeoff_s + dt, 1.0, max_gap_s, "marker")
+        dt = marker_period_s or float(np.median(np.diff(data.marker_t_s)))
+        reason = _hole_reason(data.marker_t_s, touchdown_s - dt, takeoff_s + dt, 1.0, max_gap_s, "marker", marker_period_s)
     return reason
 
 
-def _hole_reason(t: np.ndarray, t0: float, t1: float, factor: float, extra_s: float, name: str) -> str | None:
+def _hole_reason(
+    t: np.ndarray, t0: float, t1: float, factor: float, extra_s: float, name: str, period_s: float | None
+) -> str | None:
     if t.size < 3:
         return None
-    period = float(np.median(np.diff(t)))
+    period = period_s or float(np.median(np.diff(t)))
     inside = t[(t >= t0 - period) & (t <= t1 + period)]
     steps = np.diff(inside)
     holes = steps[steps > factor * period + extra_s]
