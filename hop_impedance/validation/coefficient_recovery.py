@@ -123,6 +123,9 @@ def recover_trial(
         Marker and force low-pass cut-off of the analysis (Hz).
     edge_s : float
         Time left out of the objective at each stance edge (s), ``FitOptions.exclude_*``.
+    skip_first : int
+        Simulated stances left out at the start of the trial (the first lands from
+        the same lead-in in every seed's trial; the seed paper discarded its first hops).
     trial : HoppingTrial, optional
         An already simulated trial of ``freq_hz`` and ``seed`` (saves the simulation
         when the same trial is recorded twice).
