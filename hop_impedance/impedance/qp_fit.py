@@ -350,20 +350,11 @@ class ConstrainedLeastSquares:
     def _solve_rows(self, solver, P_upper, q, rows, x0, y0):
         """One OSQP solve of the scaled QP with ``rows @ x >= 0`` (padded with free rows).
 
-        Stages as in :meth:`solve_all_rows` (:attr:`stages`): ADMM to ``coarse_eps``, then
-        polishing (exact KKT solution of the identified active set), accepted
-        when polishing succeeded and every multiplier has the sign of an
-        active lower bound (OSQP's y <= 0; a positive y means a wrongly
-        guessed active row, i.e. a feasible but not optimal point); otherwise
-        the same at the next stage. The working set is never empty here (its first
+        The stages of :meth:`_solve_in_stages`; a polished iterate is accepted
+        when every multiplier has the sign of an active lower bound
+        (:meth:`_right_signs`). The working set is never empty here (its first
         rows are violated by the unconstrained optimum), so its exact optimum
         always has an active row.
-
-        Polishing is only switched on once the ADMM iterate shows an active
-        row: OSQP 1.1's C polish prints "Polishing not needed - no active set
-        detected" to stdout whatever ``verbose`` says, which happened when a
-        coarse ADMM iterate had not yet identified the active row. OSQP then
-        continues from its own iterate (warm start) and polishes.
 
         Returns
         -------
@@ -384,26 +375,13 @@ class ConstrainedLeastSquares:
         y_start = np.zeros(m)
         y_start[: y0.size] = y0
         solver.warm_start(x=x0, y=y_start)
-        iterations, status, polished = 0, "not solved", False
-        for eps in self.stages:
-            self._set(p, polishing=False, eps=eps)
-            result = solver.solve(raise_error=False)
-            iterations += int(result.info.iter)
-            status = str(result.info.status)
-            if status != "solved" or not _shows_active_row(rows, result.x, result.y[:k]):
-                continue
-            self._set(p, polishing=True, eps=self.coarse_eps)  # converged iterate: ADMM stops at once, then polish
-            result = solver.solve(raise_error=False)
-            iterations += int(result.info.iter)
-            status = str(result.info.status)
-            polished = int(result.info.status_polish) == 1
-            duals = np.asarray(result.y, float)[:k]
-            right_signs = not (duals > self.eps * max(1.0, float(np.abs(duals).max(initial=0.0)))).any()
-            if status == "solved" and polished and right_signs:
-                break
-        else:
-            if status == "solved":  # not exact: the caller solves the full row set instead
-                status = "solved, not polished" if not polished else "solved with wrong-sign multipliers"
+        result, iterations, exact, polished = self._solve_in_stages(
+            solver, lambda polishing, eps: self._set(p, polishing=polishing, eps=eps), rows, k,
+            exact=lambda polished_result: self._right_signs(np.asarray(polished_result.y, float)[:k]),
+        )
+        status = str(result.info.status)
+        if not exact and status == "solved":  # not exact: the caller solves the full row set instead
+            status = "solved, not polished" if not polished else "solved with wrong-sign multipliers"
         return status, np.asarray(result.x, float), np.asarray(result.y, float)[:k], iterations, polished
 
     def solve_all_rows(self, design: np.ndarray, target: np.ndarray, constraints: np.ndarray) -> QpSolution:
@@ -435,7 +413,11 @@ class ConstrainedLeastSquares:
             self._solver.warm_start(x=x_ols)
         else:
             self._solver.warm_start(x=self._last_x[p])
-        result, iterations = self._solve_all_rows_in_stages(A, ols_feasible)
+        result, iterations, _, _ = self._solve_in_stages(
+            self._solver,
+            lambda polishing, eps: self._solver.update_settings(eps_abs=eps, eps_rel=eps, polishing=polishing),
+            A, A.shape[0], exact=lambda polished_result: True, accept_unpolished=ols_feasible,
+        )
         status = str(result.info.status)
         xs = np.asarray(result.x, float)
         if status == "solved" and np.isfinite(xs).all():
@@ -444,34 +426,66 @@ class ConstrainedLeastSquares:
             X, y, A, xs, status, iterations, int(result.info.status_polish) == 1, y_norm, col_norm, -1, 0
         )
 
-    def _solve_all_rows_in_stages(self, rows: np.ndarray, ols_feasible: bool):
-        """ADMM through :attr:`stages`; polish at a stage only once its iterate shows an active row.
+    def _right_signs(self, duals: np.ndarray) -> bool:
+        """Every working-row multiplier has the sign of an active lower bound (OSQP's y <= 0, to ``eps``).
 
-        A feasible unconstrained optimum is accepted from the first stage (no
-        active row, nothing to polish). Otherwise a stage's iterate is
-        polished (exact KKT solution of its active set; OSQP continues from
-        the iterate, warm) only when OSQP's own rule would find an active row
-        there (:func:`_shows_active_row`): polishing without one makes OSQP
-        1.1 print "Polishing not needed ..." on stdout from C, which would
-        corrupt ``analyze --json -``. An exact polished solve ends the stages.
+        A positive y means a wrongly guessed active row: a feasible but not optimal point.
+        """
+        return not (duals > self.eps * max(1.0, float(np.abs(duals).max(initial=0.0)))).any()
+
+    def _solve_in_stages(self, solver, configure, rows, k, exact, accept_unpolished=False):
+        """ADMM through :attr:`stages`; polish a stage's iterate only once it shows an active row.
+
+        Shared by the working-set and the full-row paths. Each stage runs ADMM
+        (warm, from the previous stage's iterate) without polishing. When its
+        iterate shows an active row by OSQP's own rule
+        (:func:`_shows_active_row`), the iterate is polished: polishing
+        without one makes OSQP 1.1 print "Polishing not needed ..." on stdout
+        from C, whatever ``verbose`` says, which would corrupt
+        ``analyze --json -``. The polishing re-solve runs at ``coarse_eps``: the
+        iterate has converged, so ADMM stops at its first check and OSQP
+        polishes (at the stage's own tolerance a warm re-solve once took
+        20,000 iterations). A successful polish that passes ``exact`` ends the
+        stages; so does the first solved stage when ``accept_unpolished``.
+
+        Parameters
+        ----------
+        solver : osqp.OSQP
+            Workspace, already set up and warm-started.
+        configure : callable
+            ``configure(polishing, eps)`` applies OSQP's polishing and
+            eps_abs = eps_rel settings to ``solver``.
+        rows : ndarray, shape (k, p)
+            Scaled constraint rows (lower bound 0), OSQP's first ``k`` rows.
+        k : int
+        exact : callable
+            ``exact(result) -> bool`` for a solved, polished result (e.g. the
+            multiplier sign check).
+        accept_unpolished : bool
+            Accept the first solved stage as it is (the unconstrained optimum is
+            feasible: nothing is active, nothing to polish).
 
         Returns
         -------
-        (result, iterations): OSQP's last result and the ADMM iterations of all solves.
+        (result, iterations, exact, polished): OSQP's last result, ADMM
+        iterations of all solves, whether it was accepted as exact, and
+        whether the last polishing attempt succeeded.
         """
-        result, iterations = None, 0
+        result, iterations, polished = None, 0, False
         for eps in self.stages:
-            self._solver.update_settings(eps_abs=eps, eps_rel=eps, polishing=False)
-            result = self._solver.solve(raise_error=False)
+            configure(False, eps)
+            result = solver.solve(raise_error=False)
             iterations += int(result.info.iter)
             if str(result.info.status) != "solved":
                 continue
-            if ols_feasible:
-                break
-            if _shows_active_row(rows, result.x, result.y):
-                self._solver.update_settings(polishing=True)
-                result = self._solver.solve(raise_error=False)
-                iterations += int(result.info.iter)
-                if str(result.info.status) == "solved" and int(result.info.status_polish) == 1:
-                    break
-        return result, iterations
+            if accept_unpolished:
+                return result, iterations, True, polished
+            if not _shows_active_row(rows, result.x, result.y[:k]):
+                continue
+            configure(True, self.coarse_eps)
+            result = solver.solve(raise_error=False)
+            iterations += int(result.info.iter)
+            polished = int(result.info.status_polish) == 1
+            if str(result.info.status) == "solved" and polished and exact(result):
+                return result, iterations, True, polished
+        return result, iterations, False, polished
