@@ -37,9 +37,8 @@ no second derivative of the angle.
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.integrate import cumulative_simpson
@@ -277,7 +276,7 @@ def parameter_indices(terms: tuple[str, ...] | list[str]) -> np.ndarray:
     return np.array(_parameter_index_tuple(tuple(terms)), dtype=int)
 
 
-@functools.lru_cache(maxsize=256)
+@lru_cache(maxsize=256)
 def _parameter_index_tuple(terms: tuple[str, ...]) -> tuple[int, ...]:
     """:func:`parameter_indices` as a tuple, computed once per term tuple."""
     unknown = [name for name in terms if name not in TERM_NAMES]

@@ -303,21 +303,23 @@ def _drop_terms_held_at_zero(terms, moment_rows, tau, regs, solver, solution, re
             for name, c in zip(terms, contribution)
             if c <= _ZERO_CONTRIBUTION * scale and not any(h in terms for h in HIGHER_ORDER_TERMS[name])
         ]
-        remaining = tuple(t for t in terms if t != (held[-1] if held else None))
-        if not held or not any(t.startswith("k") for t in remaining):
+        if not held:
+            return terms, solution, reduction
+        term = held[-1]
+        remaining = tuple(t for t in terms if t != term)
+        if not any(t.startswith("k") for t in remaining):
             return terms, solution, reduction
         new_columns = parameter_indices(remaining)
         A, _ = constraint_rows(regs, new_columns)
         refit = solver.solve(moment_rows[:, new_columns], tau, A)
         if not refit.converged or refit.sse > solution.sse * (1.0 + 1e-6) + 1e-12:
             return terms, solution, reduction
-        step = EliminationStep(held[-1], HELD_AT_ZERO, 1.0, 0.0, float("nan"))
         reduction = replace(
             reduction,
             terms=remaining,
-            steps=reduction.steps + (step,),
-            p_values={k: v for k, v in reduction.p_values.items() if k != held[-1]},
-            f_statistics={k: v for k, v in reduction.f_statistics.items() if k != held[-1]},
+            steps=reduction.steps + (EliminationStep(term, HELD_AT_ZERO, 1.0, 0.0, float("nan")),),
+            p_values={k: v for k, v in reduction.p_values.items() if k != term},
+            f_statistics={k: v for k, v in reduction.f_statistics.items() if k != term},
             ols_variance_factors=None,
         )
         terms, solution = remaining, refit
