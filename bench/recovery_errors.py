@@ -26,18 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hop_impedance.validation.coefficient_recovery import JOINTS, RecoveryResult, recover_trial, simulate_law_trial
-
-
-def pooled_results(freq_hz: float, seeds: list[int], args, folder: Path) -> dict[str, RecoveryResult]:
-    """Clean and noisy results of every seed's trial at one frequency, pooled."""
-    out = {"clean": RecoveryResult(), "noisy": RecoveryResult()}
-    for seed in seeds:
-        trial = simulate_law_trial(freq_hz, seed, args.hops)
-        for label, noisy, cutoff in (("clean", False, args.clean_cutoff), ("noisy", True, args.noisy_cutoff)):
-            out[label].extend(recover_trial(freq_hz, seed, noisy, folder, n_hops=args.hops, cutoff_hz=cutoff,
-                                            edge_s=args.edge, skip_first=args.skip_first, trial=trial))
-    return out
+from hop_impedance.validation.coefficient_recovery import JOINTS, RecoveryResult, recover_pooled
 
 
 def print_table(freq_hz: float, results: dict[str, RecoveryResult]) -> None:
@@ -65,7 +54,10 @@ def main() -> None:
     cpu0 = time.process_time()
     with tempfile.TemporaryDirectory() as folder:
         for freq in args.frequencies:
-            print_table(freq, pooled_results(freq, args.seeds, args, Path(folder)))
+            cutoffs = {"clean": args.clean_cutoff, "noisy": args.noisy_cutoff}
+            results = recover_pooled(freq, args.seeds, Path(folder), cutoff_hz=cutoffs, n_hops=args.hops,
+                                     edge_s=args.edge, skip_first=args.skip_first)
+            print_table(freq, results)
     print(f"CPU {time.process_time() - cpu0:.1f} s")
 
 

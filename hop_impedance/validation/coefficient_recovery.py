@@ -181,3 +181,32 @@ def simulate_law_trial(freq_hz: float, seed: int, n_hops: int = 4):
 
     chain, config = hopping_config(freq_hz, "hard", n_hops, Effects(push_off=False))
     return simulate_hopping(chain, config, seed=seed)
+
+
+def recover_pooled(
+    freq_hz: float,
+    seeds,
+    folder: Path,
+    *,
+    cutoff_hz: dict[str, float],
+    n_hops: int = 4,
+    edge_s: float = 0.0,
+    skip_first: int = 0,
+) -> dict[str, RecoveryResult]:
+    """Every seed's trial at one frequency, recorded noise-free and noisy, recovered and pooled.
+
+    Each trial is simulated once and sampled twice. ``cutoff_hz`` maps
+    ``"clean"`` and ``"noisy"`` to the analysis cut-off (Hz) of that
+    recording; the other arguments as in :func:`recover_trial`.
+
+    Returns
+    -------
+    ``{"clean": RecoveryResult, "noisy": RecoveryResult}``
+    """
+    out = {"clean": RecoveryResult(), "noisy": RecoveryResult()}
+    for seed in seeds:
+        trial = simulate_law_trial(freq_hz, seed, n_hops)
+        for label, result in out.items():
+            result.extend(recover_trial(freq_hz, seed, label == "noisy", folder, n_hops=n_hops, cutoff_hz=cutoff_hz[label],
+                                        edge_s=edge_s, skip_first=skip_first, trial=trial))
+    return out

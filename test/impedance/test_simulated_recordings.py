@@ -153,17 +153,11 @@ def test_truth_samples_without_push_off_recover_the_coefficients(truth_path):
 def simulated_trial(request, tmp_path_factory):
     """The trials of SEEDS at one frequency, each recorded noise-free and noisy, analysed, fitted and pooled:
     ``{"clean"|"noisy": RecoveryResult, "freq": float}``."""
-    from hop_impedance.validation.coefficient_recovery import RecoveryResult, recover_trial, simulate_law_trial
+    from hop_impedance.validation.coefficient_recovery import recover_pooled
 
     freq = request.param
     folder = tmp_path_factory.mktemp(f"sim{freq}")
-    out = {"freq": freq, "clean": RecoveryResult(), "noisy": RecoveryResult()}
-    for seed in SEEDS:
-        trial = simulate_law_trial(freq, seed, N_HOPS)
-        for label in ("clean", "noisy"):
-            out[label].extend(recover_trial(freq, seed, label == "noisy", folder, n_hops=N_HOPS,
-                                            cutoff_hz=CUTOFF_HZ[label], edge_s=EDGE_S, trial=trial))
-    return out
+    return {"freq": freq, **recover_pooled(freq, SEEDS, folder, cutoff_hz=CUTOFF_HZ, n_hops=N_HOPS, edge_s=EDGE_S)}
 
 
 def _cases():
