@@ -17,6 +17,7 @@ import sys
 COMMAND_MODULES: tuple[str, ...] = (
     "demo",
     "analyze",
+    "batch",
     "simulate",
     "discover",
     "view",
@@ -32,6 +33,7 @@ Stance-by-stance stiffness and damping of the ankle, knee and hip in hopping.
 Typical use:
   hop-impedance info REC.mcap                 what a recording holds
   hop-impedance analyze REC.mcap --json OUT   stances, inverse dynamics and impedance fits
+  hop-impedance batch DIR --out OUT           many recordings on Dask, population tables
   hop-impedance simulate --freq 2.2 --out REC.mcap
   hop-impedance pipeline --recording REC.mcap the ROS 2 node graph on a replayed recording
   hop-impedance view REC.mcap --save OUT.rrd  Rerun views of a session
