@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
-"""Generate and compile the ``hop_impedance_msgs`` interface package into the venv.
+"""Generate and compile the interface packages (``hop_impedance_msgs``, ``mocap4r2_msgs``) into the venv.
 
 Uses the PyPI ROS 2 wheels (ament_cmake, rosidl generators) with Debian's cmake
 and g++. Installed into the virtual environment's prefix, so nothing needs to be
 sourced at run time: ``from hop_impedance_msgs.msg import MarkerArray`` works in
-rclpy.
+rclpy. ``mocap4r2_msgs`` (``mocap4r2_msgs/``) is the Markers/Marker part of the
+MOCAP4ROS2 drivers' package, rebuilt so the mocap4r2 adapter node can subscribe.
 
 Two things make this work with the wheels (see shared/notes/ROS2_FROM_PYPI.md):
 
@@ -13,8 +14,9 @@ Two things make this work with the wheels (see shared/notes/ROS2_FROM_PYPI.md):
    non-existent include paths, so they are rewritten to this interpreter's.
 2. ``AMENT_PREFIX_PATH`` and ``CMAKE_PREFIX_PATH`` point at the venv prefix.
 
-The build is skipped when the .msg files, CMakeLists.txt and package.xml are
-unchanged since the last successful build (a hash stamp in the build folder).
+Each package's build is skipped when its .msg files, CMakeLists.txt and
+package.xml are unchanged since its last successful build (a hash stamp in
+its build folder).
 
 Usage: ``.venv/bin/python scripts/build_msgs.py [--force]``
 """
@@ -31,15 +33,15 @@ import sysconfig
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-PKG_DIR = ROOT / "msg_defs"
-BUILD_DIR = ROOT / "build" / "hop_impedance_msgs"
+#: Interface packages: name -> source folder (built in this order; each into build/<name>).
+PACKAGES = {"hop_impedance_msgs": ROOT / "msg_defs", "mocap4r2_msgs": ROOT / "mocap4r2_msgs"}
 WHEEL_BUILDER_PATH = re.compile(r"/opt/python/cp3\d+-cp3\d+/(include/python3\.\d+|lib/python3\.\d+/site-packages/numpy/_core/include)")
 
 
-def source_hash() -> str:
+def source_hash(pkg_dir: Path) -> str:
     """Hash of everything that defines the generated package."""
     h = hashlib.sha256()
-    files = sorted(PKG_DIR.glob("msg/*.msg")) + [PKG_DIR / "CMakeLists.txt", PKG_DIR / "package.xml"]
+    files = sorted(pkg_dir.glob("msg/*.msg")) + [pkg_dir / "CMakeLists.txt", pkg_dir / "package.xml"]
     for f in files:
         h.update(f.name.encode())
         h.update(f.read_bytes())
@@ -67,9 +69,9 @@ def fix_wheel_cmake_paths(prefix: Path) -> int:
     return changed
 
 
-def run(cmd: list[str], env: dict[str, str]) -> None:
-    """Run a build step; its output goes to build/hop_impedance_msgs/build.log, shown on failure."""
-    log = BUILD_DIR / "build.log"
+def run(cmd: list[str], env: dict[str, str], build_dir: Path) -> None:
+    """Run a build step; its output goes to build/<package>/build.log, shown on failure."""
+    log = build_dir / "build.log"
     log.parent.mkdir(parents=True, exist_ok=True)
     with open(log, "a", encoding="utf-8") as fh:
         fh.write("+ " + " ".join(cmd) + "\n")
@@ -81,14 +83,14 @@ def run(cmd: list[str], env: dict[str, str]) -> None:
         raise SystemExit(f"build_msgs: '{cmd[0]} {cmd[1]}' failed (exit {proc.returncode}); full log: {log}")
 
 
-def build(prefix: Path) -> None:
+def build(prefix: Path, pkg_dir: Path, build_dir: Path) -> None:
     env = dict(os.environ)
     env["AMENT_PREFIX_PATH"] = str(prefix)
     env["CMAKE_PREFIX_PATH"] = str(prefix)
     jobs = str(max(1, os.cpu_count() or 1))
     run(
         [
-            "cmake", "-S", str(PKG_DIR), "-B", str(BUILD_DIR),
+            "cmake", "-S", str(pkg_dir), "-B", str(build_dir),
             f"-DCMAKE_PREFIX_PATH={prefix}",
             f"-DCMAKE_INSTALL_PREFIX={prefix}",
             f"-DPython3_EXECUTABLE={sys.executable}",
@@ -96,9 +98,10 @@ def build(prefix: Path) -> None:
             "-DBUILD_TESTING=OFF",
         ],
         env,
+        build_dir,
     )
-    run(["cmake", "--build", str(BUILD_DIR), "-j", jobs], env)
-    run(["cmake", "--install", str(BUILD_DIR)], env)
+    run(["cmake", "--build", str(build_dir), "-j", jobs], env, build_dir)
+    run(["cmake", "--install", str(build_dir)], env, build_dir)
 
 
 def main() -> int:
@@ -109,18 +112,23 @@ def main() -> int:
     if prefix == Path(sys.base_prefix):
         print("build_msgs: run this with the project's virtual environment's python", file=sys.stderr)
         return 2
-    stamp = BUILD_DIR / ".source_hash"
-    digest = source_hash()
-    if not args.force and stamp.exists() and stamp.read_text() == digest:
-        print("hop_impedance_msgs: up to date")
-        return 0
-    n = fix_wheel_cmake_paths(prefix)
-    if n:
-        print(f"build_msgs: fixed wheel include paths in {n} cmake file(s)")
-    print("hop_impedance_msgs: generating and compiling (cmake + g++, about 20-60 s) ...", flush=True)
-    build(prefix)
-    stamp.write_text(digest)
-    print("hop_impedance_msgs: built and installed into", prefix)
+    fixed = False
+    for name, pkg_dir in PACKAGES.items():
+        build_dir = ROOT / "build" / name
+        stamp = build_dir / ".source_hash"
+        digest = source_hash(pkg_dir)
+        if not args.force and stamp.exists() and stamp.read_text() == digest:
+            print(f"{name}: up to date")
+            continue
+        if not fixed:
+            n = fix_wheel_cmake_paths(prefix)
+            if n:
+                print(f"build_msgs: fixed wheel include paths in {n} cmake file(s)")
+            fixed = True
+        print(f"{name}: generating and compiling (cmake + g++, about 20-60 s) ...", flush=True)
+        build(prefix, pkg_dir, build_dir)
+        stamp.write_text(digest)
+        print(f"{name}: built and installed into", prefix)
     return 0
 
 

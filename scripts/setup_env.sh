@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Create .venv (if missing), install what the requirements files list, the package
-# itself (editable) and build the hop_impedance_msgs interface package into the venv.
+# itself (editable) and build the interface packages (hop_impedance_msgs, mocap4r2_msgs) into the venv.
 # Each step is skipped when its inputs have not changed, so re-running is quick.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -57,7 +57,7 @@ if need package setup.py setup.cfg; then
   $PIP --no-deps -e .
   done_ package
 fi
-# Generates and compiles msg_defs/ unless unchanged (it keeps its own hash stamp).
+# Generates and compiles msg_defs/ and mocap4r2_msgs/ unless unchanged (each keeps its own hash stamp).
 "$VENV/bin/python" scripts/build_msgs.py
 # Rerun's SDK and viewer send usage analytics unless told not to (config in ~/.config/rerun).
 if [ ! -f "$STAMPS/rerun-analytics-off-$(id -u)" ] || [ ! -f "${XDG_CONFIG_HOME:-$HOME/.config}/rerun/analytics.json" ]; then
