@@ -8,7 +8,8 @@ there for the agreement between the two.
 Pipeline (all times in seconds since the recording's first message)
 -------------------------------------------------------------------
 1. Stance detection on the raw vertical force (:class:`StanceDetector`,
-   which tracks the flight baseline itself).
+   which estimates the flight baseline from the data and scales its
+   thresholds with the subject's body weight).
 2. Plate zeroing: offsets measured in each flight, interpolated between
    flight centres (:mod:`force_plate`).
 3. Zero-lag low-pass of the wrench at ``force_cutoff_hz`` (default = the
@@ -39,7 +40,7 @@ from hop_impedance.biomech.force_plate import (
 from hop_impedance.biomech.inverse_dynamics import inverse_dynamics_2d, joint_power
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.biomech.kinematics import Kinematics, body_model_from_markers, compute_kinematics, sagittal_markers
-from hop_impedance.biomech.stance_detection import DetectorOptions, Stance, detect_stances
+from hop_impedance.biomech.stance_detection import DetectorOptions, Stance, StanceDetector
 from hop_impedance.biomech.stance_metrics import (
     com_displacement_from_grf,
     hip_excursion,
@@ -343,12 +344,39 @@ def analyze_recording(rec: Recording, options: AnalysisOptions | None = None) ->
     if rec.subject is None:
         raise ValueError(f"{rec.source or 'recording'}: no {SUBJECT_TOPIC} message; give the subject's mass and height")
     data = recording_span(rec)
-    stances = detect_stances(data.force_t_s, data.wrench[:, 1], options.detector)
+    detector = StanceDetector(options.detector, rec.subject.body_mass_kg * GRAVITY_M_S2)
+    detector.push(data.force_t_s, data.wrench[:, 1])
+    detector.flush()
+    stances = detector.stances
     model = options.body_model
     if model is None and data.markers_xz is not None:
         model = body_model_from_markers(rec.subject, rec.markers, options.overrides)
     results = analyze_span(data, stances, list(range(len(stances))), model, rec.subject.body_mass_kg, options)
-    return RecordingAnalysis(rec.subject, model, rec.start_ns, recording_info(rec), results, list(rec.warnings), options)
+    _reject_holes(results, data, options)
+    return RecordingAnalysis(rec.subject, model, rec.start_ns, recording_info(rec), results, list(rec.warnings) + detector.warnings, options)
+
+
+def _reject_holes(results: list[StanceResult], data: SpanData, options: AnalysisOptions) -> None:
+    """Reject stances with missing samples inside (a force gap the detector bridged), as the live stage does.
+
+    Same rule and nominal periods (first 50 steps) as
+    ``stages.StanceAnalysisStage._reject_on_loss``, so a 0.3 s force gap inside a
+    stance is a rejection offline too, not a longer stance with a lower peak.
+    """
+    from hop_impedance.biomech.stages import NominalPeriod, missing_samples_reason  # stages imports this module
+
+    force_period, marker_period = NominalPeriod(), NominalPeriod()
+    force_period.update(data.force_t_s)
+    if data.marker_t_s is not None:
+        marker_period.update(data.marker_t_s)
+    for res in results:
+        if not res.complete:
+            continue  # cut by the recording's start or end: already rejected for that
+        reason = missing_samples_reason(data, res.touchdown_s, res.takeoff_s, options.max_gap_s,
+                                        force_period_s=force_period.value, marker_period_s=marker_period.value)
+        if reason is not None:
+            res.rejection_reason = reason if res.rejection_reason is None else f"{reason}; {res.rejection_reason}"
+            res.joints = None
 
 
 def recording_info(rec: Recording) -> dict:

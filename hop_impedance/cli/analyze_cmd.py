@@ -107,8 +107,13 @@ def run(args: argparse.Namespace) -> int:
     from hop_impedance.biomech.body_model import load_overrides
     from hop_impedance.cli.json_output import json_output
     from hop_impedance.impedance.report import fit_records, write_report
-    from hop_impedance.io.recording_io import load_recording
+    from hop_impedance.input_checks import InputChecks
+    from hop_impedance.io.recording_io import check_recording, load_recording
 
+    if not args.cutoff_hz > 0:
+        raise ValueError(f"--cutoff-hz must be > 0, got {args.cutoff_hz}")
+    if not args.max_gap_s >= 0:
+        raise ValueError(f"--max-gap-s must be >= 0, got {args.max_gap_s}")
     if args.report and args.no_fit:
         raise ValueError("--report needs the fits; drop --no-fit")
     options = AnalysisOptions(
@@ -122,6 +127,12 @@ def run(args: argparse.Namespace) -> int:
         for path in args.recordings:
             rec = load_recording(path)
             rec = replace(rec, subject=_subject(rec, args, path))
+            # The shared contract checks again with the subject in use and the cut-off (rates rule).
+            checks = InputChecks(cutoff_hz=min(options.marker_cutoff_hz, options.force_cutoff_hz))
+            checks.set_subject(rec.subject)
+            check_recording(checks, rec.force, rec.markers)
+            for warning in rec.warnings:
+                print(f"hop-impedance analyze: warning: {path}: {warning}", file=sys.stderr)
             analysis = analyze_recording(rec, options)
             doc = analysis_to_json(analysis)
             if not args.no_fit:

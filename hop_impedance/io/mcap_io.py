@@ -78,6 +78,8 @@ def _check_file(path: str | Path) -> Path:
         p = metadata[0]
     with open(p, "rb") as fh:
         head = fh.read(len(MCAP_MAGIC))
+    if not head:
+        raise RecordingError(f"{p}: is empty (0 bytes)")
     if head != MCAP_MAGIC:
         raise RecordingError(f"{p}: not an MCAP file (bad magic bytes; a ROS 1 bag or sqlite3 bag is not supported)")
     return p

@@ -8,9 +8,10 @@ contract promises and saying clearly what is wrong:
   that arrived out of order are re-sorted and counted, exact duplicates dropped
   and counted, gaps longer than 1.5 sample periods counted as dropped samples;
 - a truncated file yields what was readable plus a warning saying where it stopped;
-- missing contract markers (after an optional name mapping) raise an error naming them;
-- markers that look like millimetres, and forces that look like the force on
-  the plate instead of on the subject, raise errors that say so.
+- the contract checks of :mod:`hop_impedance.input_checks` (the same ones the
+  live nodes run): missing contract markers, millimetres, the force on the
+  plate instead of on the subject, implausible subject values raise
+  :class:`~hop_impedance.input_checks.InputCheckError` naming the rule.
 
 All warnings are collected in ``Recording.warnings`` (one line each).
 """
@@ -21,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hop_impedance.input_checks import InputChecks, order_by_stamp
 from hop_impedance.io.mcap_io import McapWriter, MessageStream, RecordingError
 from hop_impedance.recording import (
     FORCE_TOPIC,
@@ -45,20 +47,6 @@ def _stamp_ns(header) -> int:
     return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
 
 
-def _order_by_stamp(stamps: np.ndarray, label: str, warnings: list[str]) -> np.ndarray:
-    """Indices that sort samples by stamp and drop exact duplicates; notes what was done."""
-    order = np.argsort(stamps, kind="stable")
-    n_out_of_order = int(np.count_nonzero(np.diff(stamps) < 0))
-    if n_out_of_order:
-        warnings.append(f"{label}: {n_out_of_order} message(s) arrived out of order; re-sorted by header.stamp")
-    sorted_stamps = stamps[order]
-    keep = np.concatenate([[True], np.diff(sorted_stamps) > 0]) if len(order) else np.zeros(0, bool)
-    n_dup = int(np.count_nonzero(~keep))
-    if n_dup:
-        warnings.append(f"{label}: {n_dup} message(s) with a repeated header.stamp dropped")
-    return order[keep]
-
-
 def _count_gaps(stamps: np.ndarray, label: str, warnings: list[str]) -> None:
     if len(stamps) < 3:
         return
@@ -68,16 +56,6 @@ def _count_gaps(stamps: np.ndarray, label: str, warnings: list[str]) -> None:
     if big.any():
         missing = int(np.sum(np.round(dt[big] / period) - 1))
         warnings.append(f"{label}: {missing} sample(s) missing in {int(big.sum())} gap(s) (nominal period {period * 1e-6:.2f} ms)")
-
-
-def _marker_columns(names: list[str], wanted: dict[str, str]) -> list[int]:
-    missing = [f"{contract} (as {name!r})" if contract != name else contract for contract, name in wanted.items() if name not in names]
-    if missing:
-        raise RecordingError(
-            f"{MARKER_TOPIC}: missing marker(s) {', '.join(missing)}; the recording has {names}. "
-            "Give a mapping (--marker-map) if the names differ."
-        )
-    return [names.index(wanted[c]) for c in MARKER_NAMES]
 
 
 def load_recording(path: str | Path, marker_map: dict[str, str] | None = None, require_markers: bool = False) -> Recording:
@@ -112,8 +90,7 @@ def load_recording(path: str | Path, marker_map: dict[str, str] | None = None, r
     m_pos: list[np.ndarray] = []
     subject: Subject | None = None
     marker_cols: list[int] | None = None
-    marker_names: list[str] | None = None
-    wanted = {name: (marker_map or {}).get(name, name) for name in MARKER_NAMES}
+    checks = InputChecks(marker_map=marker_map)
     warnings: list[str] = []
     n_bad_marker_frames = 0
     for msg in stream:
@@ -124,9 +101,8 @@ def load_recording(path: str | Path, marker_map: dict[str, str] | None = None, r
             f_vals.append((f.x, f.y, f.z, t.x, t.y, t.z))
         elif msg.topic == MARKER_TOPIC:
             names = list(m.names)
-            if names != marker_names:
-                marker_cols = _marker_columns(names, wanted)
-                marker_names = names
+            marker_cols = checks.marker_names(names)
+            checks.raise_if_failed()
             if len(m.positions) != len(names):
                 n_bad_marker_frames += 1
                 continue
@@ -148,54 +124,35 @@ def load_recording(path: str | Path, marker_map: dict[str, str] | None = None, r
     elif require_markers:
         raise RecordingError(f"{stream.path}: no {MARKER_TOPIC} messages; joint angles and moments need markers")
     if subject is None:
-        warnings.append(f"{SUBJECT_TOPIC}: missing; body mass and height must be given (e.g. --mass, --height)")
+        warnings.append(f"{SUBJECT_TOPIC}: missing; body mass and height must be given (e.g. --mass-kg, --height-m)")
     else:
-        _check_subject(subject)
-    _check_force_units(force, subject)
+        checks.set_subject(subject)
+    check_recording(checks, force, markers)
     return Recording(force=force, markers=markers, subject=subject, source=str(stream.path), warnings=warnings)
 
 
 def _force_series(stamps: np.ndarray, vals: np.ndarray, warnings: list[str]) -> ForcePlateSeries:
-    idx = _order_by_stamp(stamps, FORCE_TOPIC, warnings)
+    idx = order_by_stamp(stamps, FORCE_TOPIC, warnings)
     _count_gaps(stamps[idx], FORCE_TOPIC, warnings)
     return ForcePlateSeries(stamps[idx], vals[idx, :3].copy(), vals[idx, 3:].copy())
 
 
 def _marker_series(stamps: np.ndarray, pos: np.ndarray, warnings: list[str]) -> MarkerSeries:
-    idx = _order_by_stamp(stamps, MARKER_TOPIC, warnings)
+    idx = order_by_stamp(stamps, MARKER_TOPIC, warnings)
     _count_gaps(stamps[idx], MARKER_TOPIC, warnings)
-    pos = pos[idx]
-    finite = pos[np.isfinite(pos)]
-    if finite.size and np.nanmedian(np.abs(finite)) > 20.0:
-        raise RecordingError(
-            f"{MARKER_TOPIC}: marker coordinates have a median magnitude of {np.nanmedian(np.abs(finite)):.0f}; "
-            "they look like millimetres, but the contract says metres"
-        )
-    return MarkerSeries(stamps[idx], MARKER_NAMES, pos)
+    return MarkerSeries(stamps[idx], MARKER_NAMES, pos[idx])
 
 
-def _check_subject(subject: Subject) -> None:
-    if not 10.0 <= subject.body_mass_kg <= 300.0:
-        raise RecordingError(f"{SUBJECT_TOPIC}: body_mass {subject.body_mass_kg} kg is implausible (contract: kg)")
-    if not 0.5 <= subject.body_height_m <= 2.6:
-        raise RecordingError(f"{SUBJECT_TOPIC}: body_height {subject.body_height_m} m is implausible (contract: m)")
+def check_recording(checks: InputChecks, force: ForcePlateSeries, markers: MarkerSeries | None) -> None:
+    """Run the shared contract checks (:mod:`hop_impedance.input_checks`) on loaded arrays; raise on a failure.
 
-
-def _check_force_units(force: ForcePlateSeries, subject: Subject | None) -> None:
-    fz = force.force_n[:, 2]
-    if not len(fz):
-        return
-    lo, hi = np.percentile(fz, [1, 99])
-    if -lo > 5 * max(hi, 1.0) and -lo > 100:
-        raise RecordingError(
-            f"{FORCE_TOPIC}: force.z is mostly negative (down to {lo:.0f} N); the contract wants the force on "
-            "the subject (z up), this looks like the force on the plate"
-        )
-    if subject is not None and hi > 40 * subject.body_weight_n:
-        raise RecordingError(
-            f"{FORCE_TOPIC}: force.z reaches {hi:.0f} N, {hi / subject.body_weight_n:.0f} body weights; "
-            "not newtons?"
-        )
+    ``checks`` already holds the subject and marker names; the streams are fed
+    in stamp order, as the live nodes see them after their reorder buffers.
+    """
+    checks.force(force.stamp_ns, force.force_n[:, 2])
+    if markers is not None:
+        checks.markers(markers.stamp_ns, markers.positions_m)
+    checks.raise_if_failed()
 
 
 def save_recording(path: str | Path, recording: Recording, compression: str = "zstd", chunk_size: int = 1 << 20) -> None:
