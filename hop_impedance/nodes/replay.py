@@ -62,20 +62,17 @@ from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
 DEFAULT_TOPICS = [FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC]
 
 
-def _raw_messages(path: str, topics: list[str]):
-    """(topic, schema name, log time ns, CDR bytes) in log-time order, without decoding."""
-    from mcap.reader import make_reader
+def _raw_messages(path: str, topics: list[str], stops: list[str] | None = None):
+    """(topic, schema name, log time ns, CDR bytes) in log-time order, without decoding, to the break.
 
-    from hop_impedance.io.mcap_io import _check_file
-
-    p = _check_file(path)
-    with open(p, "rb") as fh:
-        reader = make_reader(fh)
-        try:
-            for schema, channel, message in reader.iter_messages(topics=topics, log_time_order=True):
-                yield channel.topic, schema.name, message.log_time, message.data
-        except Exception as exc:  # truncated file: stop where the data stops  # noqa: BLE001
-            raise RecordingError(f"{p}: reading stopped early ({type(exc).__name__}: {exc})") from None
+    A truncated or damaged file yields what precedes the damage; where it stopped
+    is appended to ``stops`` (one line).
+    """
+    stream = MessageStream(path, topics=topics, decode=False)
+    for m in stream:
+        yield m.topic, m.schema_name, m.log_time_ns, m.message
+    if stream.stopped_at and stops is not None:
+        stops.append(f"{stream.path.name}: {stream.stopped_at}")
 
 
 class ReplayNode(Node):
@@ -96,11 +93,10 @@ class ReplayNode(Node):
         self.consumers = [c for c in self.get_parameter("consumers").value if c]
         self.max_ahead_ns = int(float(self.get_parameter("max_ahead_s").value) * 1e9)
         self.consumer_timeout_s = float(self.get_parameter("consumer_timeout_s").value)
-        self.progress: dict[str, tuple[int, float]] = {}  # node -> (consumed stamp ns, wall time of report)
+        self.progress: dict[str, tuple[dict[str, int], float]] = {}  # node -> ({topic: consumed stamp ns}, wall time of report)
         self.wait_s = 0.0
         self.play_s = 0.0  # wall time from the first message played to end-of-stream (throughput without start-up)
         self.last_stamp_ns = 0
-        self._first_stamp_ns: int | None = None
         self._progress_event = threading.Event()
         from hop_impedance_msgs.msg import Progress
         from std_msgs.msg import Header
@@ -116,6 +112,10 @@ class ReplayNode(Node):
         self.topics = list(self.get_parameter("topics").value)
         self.reliable = bool(self.get_parameter("reliable").value)
         self.published = {t: 0 for t in self.topics}
+        #: Where reading a damaged file stopped (one line per pass), shown by the CLI.
+        self.stops: list[str] = []
+        self._last_published: dict[str, int] = {}  # topic -> newest stamp published (ns)
+        self._first_published: dict[str, int] = {}  # topic -> first stamp published (ns)
         self.finished = threading.Event()
         self.error: str | None = None
         self._pubs: dict[str, rclpy.publisher.Publisher] = {}
@@ -178,7 +178,7 @@ class ReplayNode(Node):
         wall0 = time.monotonic()
         first = last = None
         n = 0
-        for topic, schema, log_ns, data in _raw_messages(self.path, self.topics):
+        for topic, schema, log_ns, data in _raw_messages(self.path, self.topics, self.stops):
             if self._stop.is_set():
                 break
             if first is None:
@@ -197,8 +197,11 @@ class ReplayNode(Node):
                 stamp = header_stamp_ns(payload)
                 self.last_stamp_ns = max(self.last_stamp_ns, stamp)
                 if self.rate == 0 and self.consumers:
-                    self._wait_for_consumers(stamp)
+                    self._wait_for_consumers()
             pub.publish(payload)
+            if topic != SUBJECT_TOPIC:
+                self._first_published.setdefault(topic, stamp)
+                self._last_published[topic] = max(self._last_published.get(topic, stamp), stamp)
             self.published[topic] += 1
             n += 1
             if self.rate == 0 and not self.consumers and n % block == 0:
@@ -219,26 +222,35 @@ class ReplayNode(Node):
     def _on_progress(self, msg) -> None:
         if msg.node not in self.consumers:
             return
-        played = [stamp_ns(s) for t, s in zip(msg.topics, msg.last_stamps) if t in self.topics and t != SUBJECT_TOPIC]
-        if played:
-            self.progress[msg.node] = (min(played), time.monotonic())
+        consumed = {t: stamp_ns(s) for t, s in zip(msg.topics, msg.last_stamps) if t in self.topics and t != SUBJECT_TOPIC}
+        if consumed:
+            self.progress[msg.node] = (consumed, time.monotonic())
             self._progress_event.set()
 
-    def _wait_for_consumers(self, stamp: int) -> None:
-        """Block until every live consumer has processed up to ``stamp - max_ahead_s``."""
-        if self._first_stamp_ns is None:
-            self._first_stamp_ns = stamp
+    def _behind(self, node: str, now: float, t_wait: float) -> bool:
+        """Whether ``node`` lags more than ``max_ahead_s`` behind what was *published* on a topic it consumes.
+
+        Measured against the newest stamp already published on each topic (not the
+        stamp about to go out), so a gap in the stamps, a block of late messages or
+        a topic the file does not have (force-only, marker-only) never makes the
+        replay wait for data it has not sent: the consumer can always catch up to
+        within its reorder window, far less than ``max_ahead_s``.
+        """
+        consumed, seen = self.progress.get(node, ({}, t_wait))
+        if now - seen > self.consumer_timeout_s:
+            return False  # silent (crashed or never started): do not stall on it
+        for topic, done in consumed.items():
+            last = self._last_published.get(topic)
+            if last is not None and last - max(done, self._first_published[topic]) > self.max_ahead_ns:
+                return True
+        return False
+
+    def _wait_for_consumers(self) -> None:
+        """Block until no live consumer is more than ``max_ahead_s`` behind the published data."""
         t_wait = time.monotonic()
         while not self._stop.is_set():
             now = time.monotonic()
-            behind = []
-            for node in self.consumers:
-                consumed, seen = self.progress.get(node, (0, t_wait))
-                if now - seen > self.consumer_timeout_s:
-                    continue  # silent (crashed or never started): do not stall on it
-                if stamp - max(consumed, self._first_stamp_ns) > self.max_ahead_ns:
-                    behind.append(node)
-            if not behind:
+            if not any(self._behind(node, now, t_wait) for node in self.consumers):
                 break
             self._progress_event.clear()
             self._progress_event.wait(0.01)
@@ -277,6 +289,11 @@ def main(args=None) -> None:
     """Run the replay node until the recording has been played (or Ctrl-C)."""
     from rclpy.executors import ExternalShutdownException
 
+    from hop_impedance.nodes.common import wants_help
+
+    if wants_help(args):
+        print(__doc__)
+        return
     with rclpy.init(args=args):
         try:
             node = ReplayNode()
