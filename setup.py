@@ -46,6 +46,9 @@ setup(
             "impedance_estimator = hop_impedance.nodes.impedance_estimator:main",
             "recorder = hop_impedance.nodes.recorder:main",
             "rerun_bridge = hop_impedance.nodes.rerun_bridge:main",
+            # Live inputs of labs (issue 19): one plate per foot, MOCAP4ROS2 drivers.
+            "plate_combiner = hop_impedance.nodes.plate_combiner:main",
+            "mocap4r2_adapter = hop_impedance.nodes.mocap4r2_adapter:main",
         ],
     },
 )
