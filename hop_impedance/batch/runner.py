@@ -18,8 +18,7 @@ table are rebuilt from all recordings on every run (cheap; labels may change).
 
 Execution: ``mode="serial"`` runs :func:`analyze_item` in this process;
 otherwise one Dask task per recording on an embedded ``distributed.LocalCluster``
-(``mode="local"``: processes, one thread each, bound to 127.0.0.1, no
-dashboard) or on the scheduler at ``mode="tcp://HOST:PORT"``. A worker that
+(``mode="local"``: processes, one thread each, everything bound to 127.0.0.1) or on the scheduler at ``mode="tcp://HOST:PORT"``. A worker that
 dies mid-task makes the scheduler run the task again elsewhere (up to
 ``distributed.scheduler.allowed-failures`` times, default 3); a recording that
 keeps killing workers becomes a failure line.
@@ -162,7 +161,8 @@ def _store(out: Path, outcome: Outcome, key: str) -> Outcome:
 
 def local_cluster(workers: int | None = None):
     """An embedded ``distributed.LocalCluster``: ``workers`` processes (default: one per core), one thread
-    each, scheduler and workers on 127.0.0.1, no dashboard, quiet logs."""
+    each, scheduler, workers and the scheduler's HTTP endpoint (dashboard, if bokeh is installed) on
+    127.0.0.1, quiet logs."""
     import logging
 
     from distributed import LocalCluster
@@ -173,7 +173,7 @@ def local_cluster(workers: int | None = None):
         processes=True,
         host="127.0.0.1",
         scheduler_port=0,
-        dashboard_address=None,
+        dashboard_address="127.0.0.1:0",  # scheduler's HTTP server on loopback, any free port (never 8787)
         silence_logs=logging.ERROR,
     )
 
