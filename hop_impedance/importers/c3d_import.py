@@ -80,6 +80,17 @@ def _subject_values(params, warnings: list[str]) -> tuple[float | None, float | 
     return mass_kg, height_m, str(names[0]).strip() if names is not None else ""
 
 
+def _processing_parameters(params) -> dict[str, float]:
+    """Numeric scalar parameters of the PROCESSING group (Vicon's subject measurements, mm), by name."""
+    group = next((params[g] for g in params.keys() if g.upper() == "PROCESSING"), {})
+    out = {}
+    for name, p in group.items():
+        value = p.get("value", []) if isinstance(p, dict) else []
+        if len(value) == 1 and isinstance(value[0], (int, float, np.number)):
+            out[name] = float(value[0])
+    return out
+
+
 def _markers(c3d, warnings: list[str]) -> tuple[np.ndarray | None, tuple[str, ...], np.ndarray | None]:
     params = c3d["parameters"]
     points = np.asarray(c3d["data"]["points"], float)
@@ -193,6 +204,7 @@ def c3d_session(path: str | Path) -> LabSession:
         subject_id=subject_id or path.stem,
         source=str(path),
         warnings=warnings,
+        parameters=_processing_parameters(params),
     )
 
 

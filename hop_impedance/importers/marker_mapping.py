@@ -10,9 +10,13 @@ A mapping is a small YAML file (ready ones ship in
       ...
     forward_pairs:      # rear -> front label pairs to detect the heading
       - [r_calc, r_toe]
+    virtual_markers:    # optional: points built by published rules, usable as labels above
+      R_HJC_reg: {method: harrington2007, side: right, inputs: {rasi: [r.ASIS], ...}}
+    lower_to_sole: [toe]  # optional: markers moved down to the sole (see session.py)
 
 Labels match exactly first, then ignoring case and a ``Subject:`` prefix (as
-Vicon Nexus writes ``Anna:RTOE``).
+Vicon Nexus writes ``Anna:RTOE``). Virtual markers are described in
+:mod:`hop_impedance.importers.virtual_markers`.
 """
 
 from __future__ import annotations
@@ -24,6 +28,13 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from hop_impedance.importers.virtual_markers import (
+    VirtualMarker,
+    compute,
+    missing_inputs,
+    resolve_inputs,
+    virtual_from_dict,
+)
 from hop_impedance.recording import MARKER_NAMES
 
 #: Folder holding the ready mappings shipped with the package.
@@ -45,11 +56,18 @@ class MarkerMapping:
         For each of :data:`MARKER_NAMES`, the lab labels to try, in order.
     forward_pairs : tuple of (str, str)
         Rear -> front label pairs whose horizontal direction is the heading.
+    virtual : tuple of VirtualMarker
+        Points built from other markers, in declaration order (a later one may use an earlier one).
+    lower_to_sole : tuple of str
+        Contract markers to move down to the sole after the import
+        (:func:`~hop_impedance.importers.session.lower_to_sole`).
     """
 
     name: str
     candidates: dict[str, tuple[str, ...]]
     forward_pairs: tuple[tuple[str, str], ...] = ()
+    virtual: tuple[VirtualMarker, ...] = ()
+    lower_to_sole: tuple[str, ...] = ()
 
 
 def available_mappings() -> list[str]:
@@ -95,7 +113,14 @@ def mapping_from_dict(doc: dict, default_name: str = "custom", where: str = "map
         m: tuple(str(v) for v in (markers[m] if isinstance(markers[m], list) else [markers[m]])) for m in MARKER_NAMES
     }
     pairs = tuple((str(a), str(b)) for a, b in doc.get("forward_pairs", []) or [])
-    return MarkerMapping(str(doc.get("name", default_name)), candidates, pairs)
+    virtual_doc = doc.get("virtual_markers") or {}
+    if not isinstance(virtual_doc, dict):
+        raise ValueError(f"{where}: 'virtual_markers' must be a table from names to definitions")
+    virtual = tuple(virtual_from_dict(n, d, where) for n, d in virtual_doc.items())
+    sole = tuple(str(m) for m in doc.get("lower_to_sole", []) or [])
+    if bad := [m for m in sole if m not in MARKER_NAMES]:
+        raise ValueError(f"{where}: 'lower_to_sole' names unknown contract markers: {', '.join(bad)}")
+    return MarkerMapping(str(doc.get("name", default_name)), candidates, pairs, virtual, sole)
 
 
 def _normalise(label: str) -> str:
@@ -109,6 +134,54 @@ def find_label(labels: list[str] | tuple[str, ...], wanted: str) -> int | None:
     norm = [_normalise(x) for x in labels]
     w = _normalise(wanted)
     return norm.index(w) if w in norm else None
+
+
+def available_labels(labels: list[str] | tuple[str, ...], mapping: MarkerMapping) -> list[str]:
+    """The file's labels followed by the names of the mapping's virtual markers that its labels can build."""
+    out = list(labels)
+    for vm in mapping.virtual:
+        if resolve_inputs(vm, out, find_label) is not None:
+            out.append(vm.name)
+    return out
+
+
+def with_virtual_markers(
+    labels: list[str] | tuple[str, ...],
+    positions: np.ndarray,
+    mapping: MarkerMapping,
+    parameters: dict[str, float] | None = None,
+    sex: str = "female",
+) -> tuple[list[str], np.ndarray, dict[str, str]]:
+    """Append the mapping's buildable virtual markers to a session's markers.
+
+    Returns
+    -------
+    labels : list of str, length L + V
+    positions : ndarray, shape (M, L + V, 3)
+    notes : dict of str -> str
+        Virtual marker name -> how it was built (method, citation, inputs).
+    """
+    out_labels, out_pos, notes = list(labels), positions, {}
+    for vm in mapping.virtual:
+        picked = resolve_inputs(vm, out_labels, find_label)
+        if picked is None:
+            continue
+        pos, note = compute(vm, out_labels, out_pos, picked, parameters, sex)
+        out_labels.append(vm.name)
+        out_pos = np.concatenate([out_pos, pos[:, None, :]], axis=1)
+        notes[vm.name] = note
+    return out_labels, out_pos, notes
+
+
+def source_notes(labels: list[str], mapping: MarkerMapping, virtual_notes: dict[str, str]) -> list[str]:
+    """One line per contract marker: which label or virtual marker fed it (``labels`` include virtual ones)."""
+    idx = resolve_labels(labels, mapping)
+    lines = []
+    for name in MARKER_NAMES:
+        label = labels[idx[name]]
+        how = f" = {virtual_notes[label]}" if label in virtual_notes else ""
+        lines.append(f"{name} <- {label}{how}")
+    return lines
 
 
 def resolve_labels(labels: list[str] | tuple[str, ...], mapping: MarkerMapping) -> dict[str, int]:
@@ -125,6 +198,7 @@ def resolve_labels(labels: list[str] | tuple[str, ...], mapping: MarkerMapping) 
         Naming every contract marker that has none of its labels in the file,
         the labels tried and the closest labels present.
     """
+    labels = available_labels(labels, mapping)
     found: dict[str, int] = {}
     problems = []
     for name in MARKER_NAMES:
@@ -136,8 +210,13 @@ def resolve_labels(labels: list[str] | tuple[str, ...], mapping: MarkerMapping) 
         near = sorted(
             {x for c in mapping.candidates[name] for x in difflib.get_close_matches(c, list(labels), n=2, cutoff=0.6)}
         )
+        virtual = {vm.name: vm for vm in mapping.virtual}
+        lacks = [
+            f"{c} needs {missing_inputs(virtual[c], labels, find_label)}" for c in mapping.candidates[name] if c in virtual
+        ]
         problems.append(
             f"{name} (tried {', '.join(mapping.candidates[name])}"
+            + (f"; {'; '.join(lacks)}" if lacks else "")
             + (f"; closest in file: {', '.join(near)}" if near else "")
             + ")"
         )

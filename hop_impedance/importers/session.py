@@ -6,7 +6,9 @@ lab's own axes and with the lab's marker labels. :func:`session_to_recording`
 then does the steps common to all formats:
 
 1. check that each stream has one constant sampling rate;
-2. pick the contract's six markers with a :class:`MarkerMapping`;
+2. build the mapping's virtual markers (hip joint centre by regression ...,
+   :mod:`virtual_markers`), pick the contract's six markers with a
+   :class:`MarkerMapping` and note which label or rule fed each;
 3. find the vertical (file hint, option, or toe->head) and the heading
    (option, or rear->front marker pairs), build the rotation to the contract
    frame (:mod:`frames`);
@@ -24,7 +26,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hop_impedance.importers.frames import detect_forward, detect_up_axis, parse_axis, rotation_to_contract, to_contract
-from hop_impedance.importers.marker_mapping import MarkerMapping, contract_markers, forward_pair_positions
+from hop_impedance.importers.marker_mapping import (
+    MarkerMapping,
+    contract_markers,
+    forward_pair_positions,
+    source_notes,
+    with_virtual_markers,
+)
 from hop_impedance.importers.plates import orient_reaction, total_wrench
 from hop_impedance.recording import GRAVITY_M_S2, MARKER_NAMES, ForcePlateSeries, MarkerSeries, Recording, Subject
 
@@ -79,6 +87,9 @@ class LabSession:
     subject_id : str
     source : str
     warnings : list of str
+    parameters : dict of str -> float
+        The file's numeric subject parameters by name (C3D ``PROCESSING``,
+        e.g. ``RLegLength`` in mm), for virtual markers that need them.
     """
 
     marker_time_s: np.ndarray | None
@@ -93,6 +104,7 @@ class LabSession:
     subject_id: str = ""
     source: str = ""
     warnings: list[str] = field(default_factory=list)
+    parameters: dict[str, float] = field(default_factory=dict)
 
 
 def sampling_rate_hz(time_s: np.ndarray, what: str, rel_tol: float = 0.01) -> float:
@@ -187,7 +199,13 @@ def _ground_origin(plates: list[PlateData], rotation: np.ndarray) -> np.ndarray:
 
 
 def _resolve_axes(
-    session: LabSession, mapping: MarkerMapping | None, six: np.ndarray | None, up: str | None, forward: str | None
+    session: LabSession,
+    mapping: MarkerMapping | None,
+    six: np.ndarray | None,
+    up: str | None,
+    forward: str | None,
+    labels: list[str] | None = None,
+    positions: np.ndarray | None = None,
 ) -> tuple[np.ndarray, list[str]]:
     notes = []
     if up is not None:
@@ -195,6 +213,16 @@ def _resolve_axes(
     elif session.up_hint is not None:
         up_vec = parse_axis(session.up_hint)
         notes.append(f"vertical axis {session.up_hint} as stated by the file")
+        if six is not None:
+            # Some exporters write a screen axis that is not the lab's up (a
+            # real Qualisys file states -Z for a +Z-up lab): the body decides.
+            seen = detect_up_axis(six[:, MARKER_NAMES.index("toe")], six[:, MARKER_NAMES.index("head")])
+            if float(np.dot(seen, up_vec)) < 0.5:
+                notes[-1] = (
+                    f"vertical axis {_axis_name(seen)} detected from the toe->head markers; the file states "
+                    f"{session.up_hint} (POINT:Y_SCREEN), which would put the head below the feet: ignored"
+                )
+                up_vec = seen
     elif six is not None:
         up_vec = detect_up_axis(six[:, MARKER_NAMES.index("toe")], six[:, MARKER_NAMES.index("head")])
         notes.append(f"vertical axis {_axis_name(up_vec)} detected from the toe->head markers")
@@ -203,7 +231,7 @@ def _resolve_axes(
     if forward is not None:
         fwd = parse_axis(forward)
     elif six is not None and mapping is not None and session.marker_positions_m is not None:
-        rear, front = forward_pair_positions(session.marker_labels, session.marker_positions_m, mapping)
+        rear, front = forward_pair_positions(labels, positions, mapping)
         fwd = detect_forward(rear, front, up_vec)
         notes.append(f"subject faces lab {_vector_text(fwd)} (detected from {len(rear)} rear->front marker pair(s))")
     else:
@@ -312,14 +340,20 @@ def session_to_recording(
         marker_rate = sampling_rate_hz(session.marker_time_s, "markers")
         if (w := _rate_warning(marker_rate, CONTRACT_MARKER_RATE_HZ, "marker")) is not None:
             warnings.append(w)
-        six = contract_markers(session.marker_labels, session.marker_positions_m, mapping)
+        labels, positions, virtual_notes = with_virtual_markers(
+            session.marker_labels, session.marker_positions_m, mapping, session.parameters, sex
+        )
+        six = contract_markers(labels, positions, mapping)
+        warnings += [f"marker map {mapping.name}: {line}" for line in source_notes(labels, mapping, virtual_notes)]
         _check_overlap(session.marker_time_s, session.force_time_s, warnings)
         missing = np.isnan(six).any(axis=2).mean(axis=0)
         for name, frac in zip(MARKER_NAMES, missing):
             if frac > 0:
                 warnings.append(f"marker {name}: {100 * frac:.1f} % of frames occluded (NaN)")
 
-    rotation, notes = _resolve_axes(session, mapping, six, up, forward)
+    rotation, notes = _resolve_axes(
+        session, mapping, six, up, forward, *((labels, positions) if six is not None else (None, None))
+    )
     warnings += notes
     origin = session.origin_m if session.origin_m is not None else _ground_origin(chosen, rotation)
 
@@ -334,6 +368,13 @@ def session_to_recording(
     markers = None
     if six is not None:
         six_c = to_contract(six, rotation, origin)
+        for name in mapping.lower_to_sole:
+            drop = lower_to_sole(six_c, name)
+            warnings.append(
+                f"marker {name} lowered by {1e3 * drop:.1f} mm to the sole (its height above the plate in flat stance)"
+                if drop > 0
+                else f"marker {name} not lowered to the sole: it goes below the plates' surface (floor not at plate level?)"
+            )
         markers = MarkerSeries(_stamps_ns(session.marker_time_s), MARKER_NAMES, six_c)
 
     fz = force[:, 2]
@@ -346,6 +387,32 @@ def session_to_recording(
     return Recording(
         ForcePlateSeries(_stamps_ns(session.force_time_s), force, moment), markers, subject, session.source, warnings
     )
+
+
+#: Percentile of a foot marker's height taken as its height in flat stance.
+SOLE_PERCENTILE = 5.0
+
+
+def lower_to_sole(six_contract_m: np.ndarray, name: str) -> float:
+    """Move one contract marker down to the sole, in place; returns the drop (m).
+
+    A marker on the shoe (e.g. on the 5th metatarsal head) sits some
+    centimetres above the sole that touches the ground. In flat stance that
+    height is its height above the plate surface (contract z = 0), which is
+    the low end of its z over the trial: the drop is the 5th percentile of its
+    z (not the minimum, which one bad frame would set). Applied along the
+    vertical, so when the foot tilts by phi the point is off by h (1 - cos phi)
+    (under 1 mm for h = 3 cm up to 14 degrees).
+    """
+    k = MARKER_NAMES.index(name)
+    z = six_contract_m[:, k, 2]
+    if not np.isfinite(z).any():
+        return 0.0
+    drop = float(np.nanpercentile(z, SOLE_PERCENTILE))
+    if drop <= 0:
+        return 0.0
+    six_contract_m[:, k, 2] -= drop
+    return drop
 
 
 def _check_plates(plates: list[int], n: int) -> list[int]:
