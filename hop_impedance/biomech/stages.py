@@ -56,6 +56,7 @@ import numpy as np
 from hop_impedance.biomech.analysis import AnalysisOptions, SpanData, StanceResult, analyze_span
 from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.biomech.stance_detection import ContactEvent, DetectorOptions, Stance, StanceDetector
+from hop_impedance.recording import GRAVITY_M_S2
 
 
 class StanceDetectorStage:
@@ -65,8 +66,8 @@ class StanceDetectorStage:
     chunk; finished :class:`Stance` objects accumulate in :attr:`stances`.
     """
 
-    def __init__(self, options: DetectorOptions | None = None) -> None:
-        self.detector = StanceDetector(options)
+    def __init__(self, options: DetectorOptions | None = None, body_weight_n: float | None = None) -> None:
+        self.detector = StanceDetector(options, body_weight_n)
 
     @property
     def stances(self) -> list[Stance]:
@@ -111,7 +112,7 @@ class StanceAnalysisStage:
         self.model = model
         self.body_mass_kg = float(body_mass_kg)
         self.options = options or AnalysisOptions()
-        self.detector = StanceDetector(self.options.detector)
+        self.detector = StanceDetector(self.options.detector, self.body_mass_kg * GRAVITY_M_S2)
         self._force_t: list[np.ndarray] = []
         self._wrench: list[np.ndarray] = []
         self._marker_t: list[np.ndarray] = []

@@ -4,28 +4,59 @@ A state machine with hysteresis runs sample by sample, so the same object
 serves the live ROS node (chunks of ``(t, fz)`` as they arrive) and the batch
 analysis (one call over the whole record): both give identical events.
 
-Rules (defaults in :class:`DetectorOptions`)
----------------------------------------------
-- Forces are compared with the *flight baseline*: the running mean of Fz over
-  the current flight (from ``settle_s`` after take-off on), or the previous
-  flight's mean while the current one is still shorter than ``settle_s``;
-  0 N before the first flight. This tracks offset and drift of the plate.
-- FLIGHT -> STANCE when Fz - baseline rises above ``touchdown_n`` (40 N).
-- STANCE -> FLIGHT when Fz - baseline stays below ``takeoff_n`` (20 N) for
+Rules (defaults in :class:`DetectorOptions`, the one place they are set)
+------------------------------------------------------------------------
+- **Flight baseline from the data.** Forces are compared with the flight
+  baseline: the running mean of Fz over the current flight (from
+  ``settle_s`` after take-off on), or the previous flight's mean while the
+  current one is still shorter than ``2 settle_s``. Nothing assumes that the
+  plate reads zero: a recording whose first sample is below
+  ``start_flight_max_n`` (100 N, or ``start_flight_max_bw`` = 0.25 body
+  weights if larger) starts in flight and its baseline is the mean of the
+  samples from the first one on; above it, the recording starts in stance
+  (cut by the start) with a prior baseline of 0 N until the first flight.
+  Offset and drift of the plate are followed flight by flight.
+- **Thresholds relative to body weight, with absolute floors and a noise
+  floor.** Touchdown when Fz - baseline rises above
+  ``max(touchdown_n, touchdown_bw * BW, 2 * noise_factor * sd)``; take-off
+  candidate when it falls below ``max(takeoff_n, takeoff_bw * BW,
+  noise_factor * sd)``, where BW is the body weight (N) when known and sd the
+  SD of the plate in flight (measured in the flights seen so far). Defaults
+  3 % / 6 % of body weight, floors 10 N / 20 N, noise factor 4: 20.6 / 41 N
+  for a 70 kg subject (the former fixed 20 / 40 N), 10 / 20 N for a 30 kg
+  child (floors; 8.8 / 17.6 N would be 3 % / 6 %), 20 / 40 N with a plate
+  noise of 5 N SD whatever the mass.
+- FLIGHT -> STANCE when Fz - baseline rises above the touchdown level.
+- STANCE -> FLIGHT when Fz - baseline stays below the take-off level for
   ``min_flight_s`` (0.05 s); shorter dips are not flights. The take-off event
   is therefore emitted ``min_flight_s`` late.
+- **Detector failure.** A "stance" longer than ``max_stance_s`` (1.0 s; a
+  hopping or drop-jump contact lasts 0.15-0.8 s) whose force over the last
+  ``steady_s`` (0.1 s) is steady (SD below ``max(steady_sd_n, 3 sd)``) and far
+  from body weight (mean more than ``standing_tolerance_bw`` = 0.5 BW away
+  from 1 BW; without a body weight: mean below ``start_flight_max_n``) is not
+  a stance but a flight the baseline was wrong for (an unzeroed plate, an
+  offset step): the baseline is re-estimated as that window's mean and the
+  samples since the false touchdown (or the start of the recording) are run
+  again with it, so the hops inside are found; a warning says so
+  (:attr:`StanceDetector.warnings`). Steady force *near* body weight is
+  quiet standing (before or after hopping, as in a countermovement jump):
+  a long stance, not a failure.
 - Event times are sub-sample: the linear interpolation of the instant at
-  which Fz - baseline crosses ``event_level_n`` (default = ``takeoff_n``),
-  the level at which "a person looking at the curve" sees the force leave zero.
+  which Fz - baseline crosses ``event_level_n`` (default = the take-off
+  level), the level at which "a person looking at the curve" sees the force
+  leave zero.
 - A stance shorter than ``min_stance_s`` (0.08 s) is still reported (never
   silently dropped) but carries a rejection reason.
-- A recording starting with Fz - baseline above ``event_level_n`` starts in
-  stance: that stance is *incomplete* (cut by the start); one still in
-  progress at :meth:`StanceDetector.flush` is incomplete (cut by the end).
+- A recording starting in stance: that stance is *incomplete* (cut by the
+  start); so is a stance whose touchdown comes before the initial flight
+  lasted ``settle_s`` (no baseline yet); one still in progress at
+  :meth:`StanceDetector.flush` is incomplete (cut by the end).
 """
 
 from __future__ import annotations
 
+import collections
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -35,43 +66,84 @@ import numpy as np
 class DetectorOptions:
     """Thresholds of the stance state machine (N above the flight baseline, s).
 
+    The defaults here are the only ones: ``analyze``, the streaming stages,
+    the ``stance_detector`` and ``inverse_dynamics`` nodes and
+    ``config/pipeline.yaml`` read them (see :func:`detector_options`).
+
     Attributes
     ----------
-    touchdown_n : float
-        Fz - baseline above which a touchdown is declared (N).
-    takeoff_n : float
-        Fz - baseline below which a take-off starts (N); lower than
-        ``touchdown_n`` (hysteresis).
+    touchdown_n, takeoff_n : float
+        Absolute floors of the touchdown / take-off levels (N above the
+        flight baseline); ``touchdown_n > takeoff_n > 0`` (hysteresis).
+    touchdown_bw, takeoff_bw : float
+        Levels as fractions of body weight, used when the body weight is
+        known (the larger of floor, fraction and noise term applies).
+    noise_factor : float
+        Take-off level at least this many flight-noise SDs (touchdown twice as
+        many).
     event_level_n : float or None
-        Level whose crossing gives the event times (N); None = ``takeoff_n``.
+        Level whose crossing gives the event times (N); None = the take-off level.
     min_stance_s : float
         Shorter stances are rejected ("too short").
     min_flight_s : float
-        A dip below ``takeoff_n`` must last this long to count as flight (s).
+        A dip below the take-off level must last this long to count as flight (s).
     settle_s : float
         Flight samples closer than this to the take-off are not used for the
         baseline (s) (plate ringing).
+    max_stance_s : float
+        Physiological bound on a hopping contact (s); longer "stances" with a
+        steady force far from body weight are detector failures.
+    steady_s : float
+        Window over which a long stance's force is tested for steadiness (s).
+    steady_sd_n : float
+        Floor of the steadiness SD limit (N).
+    standing_tolerance_bw : float
+        Steady force within this many body weights of 1 BW is quiet standing.
+    start_flight_max_n, start_flight_max_bw : float
+        A recording whose first sample is below the larger of these (N, body
+        weights) starts in flight.
     """
 
-    touchdown_n: float = 40.0
-    takeoff_n: float = 20.0
+    touchdown_n: float = 20.0
+    takeoff_n: float = 10.0
+    touchdown_bw: float = 0.06
+    takeoff_bw: float = 0.03
+    noise_factor: float = 4.0
     event_level_n: float | None = None
     min_stance_s: float = 0.08
     min_flight_s: float = 0.05
     settle_s: float = 0.02
+    max_stance_s: float = 1.0
+    steady_s: float = 0.1
+    steady_sd_n: float = 10.0
+    standing_tolerance_bw: float = 0.5
+    start_flight_max_n: float = 100.0
+    start_flight_max_bw: float = 0.25
 
     def __post_init__(self) -> None:
         if not self.touchdown_n > self.takeoff_n > 0:
             raise ValueError(
                 f"need touchdown_n > takeoff_n > 0 N (hysteresis), got {self.touchdown_n} and {self.takeoff_n}"
             )
-        if self.min_flight_s < 0 or self.min_stance_s < 0 or self.settle_s < 0:
+        if not self.touchdown_bw >= self.takeoff_bw >= 0 or self.noise_factor < 0:
+            raise ValueError(f"need touchdown_bw >= takeoff_bw >= 0 and noise_factor >= 0, got "
+                             f"{self.touchdown_bw}, {self.takeoff_bw}, {self.noise_factor}")
+        if min(self.min_flight_s, self.min_stance_s, self.settle_s) < 0:
             raise ValueError("min_flight_s, min_stance_s and settle_s must be >= 0 s")
+        if not self.max_stance_s > self.steady_s > 0:
+            raise ValueError(f"need max_stance_s > steady_s > 0 s, got {self.max_stance_s} and {self.steady_s}")
+
+    def levels(self, body_weight_n: float | None = None, noise_sd_n: float = 0.0) -> tuple[float, float]:
+        """(touchdown, take-off) levels in N above the flight baseline (module docstring)."""
+        bw = body_weight_n if body_weight_n is not None and body_weight_n > 0 else 0.0
+        to = max(self.takeoff_n, self.takeoff_bw * bw, self.noise_factor * noise_sd_n)
+        td = max(self.touchdown_n, self.touchdown_bw * bw, 2 * self.noise_factor * noise_sd_n)
+        return td, to
 
     @property
     def level_n(self) -> float:
-        """Event level actually used (N)."""
-        return self.takeoff_n if self.event_level_n is None else self.event_level_n
+        """Event level without a body weight or noise estimate (N)."""
+        return self.levels()[1] if self.event_level_n is None else self.event_level_n
 
 
 @dataclass(frozen=True)
@@ -137,6 +209,24 @@ class Stance:
 class _FlightStats:
     n: int = 0
     total: float = 0.0
+    squares: float = 0.0
+
+    def add(self, f: float) -> None:
+        self.n += 1
+        self.total += f
+        self.squares += f * f
+
+    @property
+    def mean(self) -> float:
+        return self.total / self.n
+
+    @property
+    def sd(self) -> float:
+        return float(np.sqrt(max(self.squares / self.n - self.mean**2, 0.0)))
+
+
+#: Flight samples needed before their SD counts as the plate noise.
+NOISE_MIN_SAMPLES = 30
 
 
 class StanceDetector:
@@ -149,28 +239,50 @@ class StanceDetector:
     Parameters
     ----------
     options : DetectorOptions
-    initial_baseline_n : float
-        Baseline assumed before the first flight has been seen (N).
+    body_weight_n : float or None
+        Body weight (N) for the relative thresholds and the quiet-standing
+        test; None uses the absolute floors only.
     """
 
-    def __init__(self, options: DetectorOptions | None = None, initial_baseline_n: float = 0.0) -> None:
+    def __init__(self, options: DetectorOptions | None = None, body_weight_n: float | None = None) -> None:
         self.options = options or DetectorOptions()
+        self.body_weight_n = body_weight_n if body_weight_n is not None and body_weight_n > 0 else None
         self.stances: list[Stance] = []
+        #: Detector failures found and corrected (module docstring), one sentence each.
+        self.warnings: list[str] = []
+        self._last_t = np.nan
+        self._noise_sd = 0.0
+        self._reset(0.0, at_start=True)
+
+    def _reset(self, baseline_n: float, at_start: bool) -> None:
+        """State before the first sample (``at_start``) or before a re-run after a detector failure."""
         self._state: str | None = None  # None until the first sample, then "flight" / "stance"
-        self._baseline = float(initial_baseline_n)
-        self._prev_flight_baseline = float(initial_baseline_n)
+        self._at_start = at_start
+        self._baseline = float(baseline_n)
+        self._prev_flight_baseline = float(baseline_n)
         self._flight = _FlightStats()
         self._flight_start_s = -np.inf
+        self._initial_flight = False
         self._prev = (np.nan, np.nan)  # last sample (t, fz - baseline)
         self._touchdown_s: float | None = None
         self._touchdown_cut = False
         self._baseline_before = float("nan")
         self._dip_start: tuple[float, float] | None = None  # (crossing time, baseline) of a candidate take-off
         self._dip_samples: list[tuple[float, float]] = []
-        self._last_t = np.nan
-        self._first_t = np.nan
         self._pending_after: Stance | None = None  # stance waiting for the next flight's baseline
         self._rise_s: float | None = None  # last upward crossing of the event level during flight
+        self._stance_samples: collections.deque = collections.deque()  # raw (t, f) since the stance began
+        self._first_t = np.nan
+        self._set_levels()
+
+    def _set_levels(self) -> None:
+        self._td_level, self._to_level = self.options.levels(self.body_weight_n, self._noise_sd)
+        self._event_level = self._to_level if self.options.event_level_n is None else self.options.event_level_n
+
+    @property
+    def levels_n(self) -> tuple[float, float]:
+        """Touchdown and take-off levels in use (N above the flight baseline)."""
+        return self._td_level, self._to_level
 
     @property
     def in_stance(self) -> bool:
@@ -210,15 +322,15 @@ class StanceDetector:
                 continue
             if np.isfinite(self._last_t) and t <= self._last_t:
                 raise ValueError(f"time stamps must increase: {t} s after {self._last_t} s")
-            self._step(t, f, events)
             self._last_t = t
+            self._feed(t, f, events)
         return events
 
     def flush(self) -> list[ContactEvent]:
         """End of data: close a stance in progress as incomplete (cut by the end)."""
         events: list[ContactEvent] = []
         if self._pending_after is not None and self._state == "flight":
-            self._finish_pending(self._flight.total / self._flight.n if self._flight.n else float("nan"))
+            self._finish_pending(self._flight.mean if self._flight.n else float("nan"))
         if self._state == "stance" and self._touchdown_s is not None:
             events.append(ContactEvent("takeoff", self._last_t, self._baseline, cut=True))
             self._record_stance(self._touchdown_s, self._last_t, cut_start=self._touchdown_cut, cut_end=True)
@@ -228,42 +340,106 @@ class StanceDetector:
 
     # -- internals -------------------------------------------------------------
 
+    def _feed(self, t: float, f: float, events: list[ContactEvent]) -> None:
+        self._step(t, f, events)
+        if self._state == "stance":
+            self._stance_samples.append((t, f))
+            if t - self._stance_samples[0][0] > self.options.max_stance_s:
+                self._check_failure(t, events)
+
+    def _check_failure(self, t: float, events: list[ContactEvent]) -> None:
+        """A long "stance" whose recent force is steady and far from body weight: re-run with a new baseline."""
+        opt = self.options
+        samples = self._stance_samples
+        if len(samples) < 10:
+            return
+        # the steady window: the last steady_s of samples
+        i = len(samples) - 1
+        while i > 0 and t - samples[i - 1][0] <= opt.steady_s:
+            i -= 1
+        if len(samples) - i < 5:
+            return
+        window = np.fromiter((samples[j][1] for j in range(i, len(samples))), float, len(samples) - i)
+        if np.std(window) > max(opt.steady_sd_n, 3 * self._noise_sd):
+            return
+        level = float(np.mean(window))
+        rel = level - self._baseline
+        bw = self.body_weight_n
+        if bw is not None:
+            failure = abs(rel - bw) > opt.standing_tolerance_bw * bw
+        else:
+            failure = rel < opt.start_flight_max_n
+        if not failure:
+            # quiet standing: keep only what a later failure test could need
+            while len(samples) > 1 and t - samples[1][0] > opt.max_stance_s + 30.0:
+                samples.popleft()
+            return
+        replay = list(samples)
+        cut = self._touchdown_cut
+        what = "from the start of the recording" if cut else f"from {replay[0][0]:.3f} s"
+        self.warnings.append(
+            f"detector failure: steady Fz of {level:.1f} N ({rel:+.1f} N against the baseline "
+            f"{self._baseline:.1f} N) read as a stance {what} to {t:.3f} s; flight baseline re-estimated "
+            f"as {level:.1f} N and the samples run again"
+        )
+        self._reset(level, at_start=cut)
+        for ts, fs in replay:
+            self._feed(ts, fs, events)
+
+    def _start(self, t: float, f: float) -> None:
+        """First sample (of the recording, or of a re-run after a failure)."""
+        opt = self.options
+        self._first_t = t
+        bw = self.body_weight_n or 0.0
+        if self._at_start:
+            flight = f < max(opt.start_flight_max_n, opt.start_flight_max_bw * bw)
+        else:
+            flight = f - self._baseline < self._to_level
+        if flight:
+            self._enter_flight(t)
+            self._initial_flight = True
+            self._flight_start_s = t - 2 * opt.settle_s  # no take-off ringing to wait for
+            self._update_flight_baseline(t, f)
+        else:
+            self._state = "stance"
+            self._touchdown_s = t
+            self._touchdown_cut = self._at_start
+            self._baseline_before = self._baseline
+        self._prev = (t, f - self._baseline)
+
     def _step(self, t: float, f: float, events: list[ContactEvent]) -> None:
         opt = self.options
         if self._state is None:
-            self._first_t = t
-            if f - self._baseline >= opt.level_n:
-                self._state = "stance"
-                self._touchdown_s = t
-                self._touchdown_cut = True
-            else:
-                self._enter_flight(t)
-            self._prev = (t, f - self._baseline)
+            self._start(t, f)
             return
         rel = f - self._baseline
+        level = self._event_level
         if self._state == "flight":
-            if rel >= opt.level_n and (self._prev[1] < opt.level_n or self._rise_s is None):
+            if rel >= level and (self._prev[1] < level or self._rise_s is None):
                 self._rise_s = self._crossing_time(t, rel)  # where the rising edge left the zero line
-            elif rel < opt.level_n:
+            elif rel < level:
                 self._rise_s = None
-            if rel > opt.touchdown_n:
+            if rel > self._td_level:
                 td = self._rise_s if self._rise_s is not None else t
                 self._rise_s = None
+                no_baseline = self._initial_flight and self._at_start and t - self._first_t < opt.settle_s
                 self._close_flight()
                 self._state = "stance"
                 self._touchdown_s = td
-                self._touchdown_cut = False
+                self._touchdown_cut = no_baseline
                 self._baseline_before = self._baseline
-                events.append(ContactEvent("touchdown", td, self._baseline))
-            elif rel < opt.level_n:  # the rising edge of a touchdown must not bias the baseline
+                self._stance_samples.clear()
+                if not no_baseline:
+                    events.append(ContactEvent("touchdown", td, self._baseline))
+            elif rel < level:  # the rising edge of a touchdown must not bias the baseline
                 self._update_flight_baseline(t, f)
                 rel = f - self._baseline
         else:  # stance
             if self._dip_start is None:
-                if rel < opt.takeoff_n:
+                if rel < self._to_level:
                     self._dip_start = (self._crossing_time(t, rel), self._baseline)
                     self._dip_samples = [(t, f)]
-            elif rel > opt.touchdown_n:
+            elif rel > self._td_level:
                 self._dip_start = None  # a short dip: still in stance
                 self._dip_samples = []
             else:
@@ -277,6 +453,7 @@ class StanceDetector:
                         self._update_flight_baseline(ts, fs)
                     self._dip_start = None
                     self._dip_samples = []
+                    self._stance_samples.clear()
                     rel = f - self._baseline
         self._prev = (t, rel)
 
@@ -286,7 +463,7 @@ class StanceDetector:
         Linear interpolation between the two samples; ``t`` itself if they do
         not bracket the level.
         """
-        level = self.options.level_n
+        level = self._event_level
         t0, r0 = self._prev
         if np.isfinite(t0) and (r0 - level) * (rel - level) <= 0 and r0 != rel:
             return float(t0 + (level - r0) / (rel - r0) * (t - t0))
@@ -296,18 +473,24 @@ class StanceDetector:
         self._state = "flight"
         self._flight = _FlightStats()
         self._flight_start_s = t
+        self._initial_flight = False
 
     def _update_flight_baseline(self, t: float, f: float) -> None:
         if t - self._flight_start_s < self.options.settle_s:
             return
-        self._flight.n += 1
-        self._flight.total += f
+        self._flight.add(f)
         if t - self._flight_start_s >= 2 * self.options.settle_s:
-            self._baseline = self._flight.total / self._flight.n
+            self._baseline = self._flight.mean
+        if self._flight.n == NOISE_MIN_SAMPLES and self._noise_sd == 0.0:
+            self._noise_sd = self._flight.sd  # first estimate of the plate noise, at once
+            self._set_levels()
 
     def _close_flight(self) -> None:
         if self._flight.n:
-            self._prev_flight_baseline = self._flight.total / self._flight.n
+            self._prev_flight_baseline = self._flight.mean
+            if self._flight.n >= NOISE_MIN_SAMPLES:
+                self._noise_sd = self._flight.sd
+                self._set_levels()
         if self._pending_after is not None:
             self._finish_pending(self._prev_flight_baseline)
 
@@ -336,7 +519,9 @@ class StanceDetector:
         )
 
 
-def detect_stances(t_s: np.ndarray, fz_n: np.ndarray, options: DetectorOptions | None = None) -> list[Stance]:
+def detect_stances(
+    t_s: np.ndarray, fz_n: np.ndarray, options: DetectorOptions | None = None, body_weight_n: float | None = None
+) -> list[Stance]:
     """Batch wrapper: run :class:`StanceDetector` over a whole record.
 
     Parameters
@@ -345,13 +530,16 @@ def detect_stances(t_s: np.ndarray, fz_n: np.ndarray, options: DetectorOptions |
         Sample times (s).
     fz_n : ndarray, shape (N,)
         Raw vertical ground reaction force (N).
+    options : DetectorOptions, optional
+    body_weight_n : float, optional
+        Body weight (N) for the relative thresholds; None = floors only.
 
     Returns
     -------
     list of Stance
         In time order, complete and incomplete ones.
     """
-    det = StanceDetector(options)
+    det = StanceDetector(options, body_weight_n)
     det.push(t_s, fz_n)
     det.flush()
     return det.stances

@@ -35,7 +35,9 @@ def test_batch_analysis_of_synthetic_hops():
     # v_td = -g*Tf/2 ... compare with an independent fine-grid integration of the ideal force.
     t = np.linspace(0, 0.3, 30001)
     disp = com_displacement_from_grf(t, peak_true * np.sin(np.pi * t / 0.3), 60.0)
-    assert a.stances[2].com_drop_grf_m == pytest.approx(-disp.min(), rel=0.02)
+    # Per stance the double integration scatters by +-1 % (2 N noise, sub-sample event times on a
+    # 1 ms grid: 0.1212-0.1236 m here); the median over the stances is the figure to compare.
+    assert np.median([s.com_drop_grf_m for s in a.stances]) == pytest.approx(-disp.min(), rel=0.02)
 
 
 def test_stance_metrics_closed_forms():

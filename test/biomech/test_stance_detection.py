@@ -10,6 +10,8 @@ from hop_impedance.biomech.force_plate import sagittal_wrench
 from hop_impedance.biomech.stance_detection import DetectorOptions, StanceDetector, detect_stances
 
 DATA = Path(__file__).resolve().parents[3] / "shared" / "data_candidates"
+#: Fixed 20 / 40 N levels (no body weight, no noise on these curves): the closed-form crossings below use 20 N.
+FIXED_20N = DetectorOptions(touchdown_n=40.0, takeoff_n=20.0, noise_factor=0.0)
 
 
 def _half_sine_hops(t, events, peak):
@@ -25,7 +27,7 @@ def test_event_times_are_the_interpolated_level_crossings():
     t = np.arange(0, 3, 0.002)
     events = [(0.2131, 0.5237), (0.7349, 1.0411), (1.2563, 1.5702)]
     peak = 1500.0
-    stances = detect_stances(t, _half_sine_hops(t, events, peak))
+    stances = detect_stances(t, _half_sine_hops(t, events, peak), FIXED_20N)
     assert len(stances) == 3
     for s, (a, b) in zip(stances, events):
         lag = np.arcsin(20.0 / peak) * (b - a) / np.pi
@@ -56,7 +58,7 @@ def test_offset_and_drift_are_tracked():
     """A 8 N offset drifting 2 N/s does not shift events by more than 0.5 ms (noise 2 N)."""
     rec, truth = hopping_recording(duration_s=4.0, offset_n=8.0, drift_n_per_s=2.0)
     t = (rec.force.stamp_ns - rec.start_ns) * 1e-9
-    stances = detect_stances(t, rec.force.force_n[:, 2])
+    stances = detect_stances(t, rec.force.force_n[:, 2], FIXED_20N)
     peak = np.pi / 2 * 60 * 9.81 * 0.5 / 0.3
     lag = np.arcsin(20.0 / peak) * 0.3 / np.pi
     assert len(stances) == len(truth)
@@ -70,7 +72,7 @@ def test_cut_stances_short_stances_and_short_dips():
     t = np.arange(0, 2, 0.001)
     f = _half_sine_hops(t, [(-0.1, 0.2), (0.5, 0.55), (0.9, 1.3), (1.8, 2.2)], 1000.0)
     f[(t > 1.1) & (t < 1.12)] = 5.0  # a 20 ms dip inside a stance is not a flight
-    s = detect_stances(t, f)
+    s = detect_stances(t, f, FIXED_20N)
     assert [x.complete for x in s] == [False, True, True, False]
     assert s[0].rejection_reason == "incomplete: cut by start of recording" and s[0].touchdown_s == 0.0
     assert s[1].rejection_reason.startswith("too short: 0.04")
@@ -108,7 +110,13 @@ def test_real_countermovement_jump_450hz():
     for x, (a, b) in zip(s, expected):
         assert x.touchdown_s == pytest.approx(a, abs=0.01)
         assert x.takeoff_s == pytest.approx(b, abs=0.01)
-    above = f > 20.0
+    # With the body weight (quiet stance 692 N, SOURCE.txt) the take-off level is 3 % of it, 20.8 N.
+    det = StanceDetector(body_weight_n=692.0)
+    det.push(t, f)
+    det.flush()
+    s = det.stances
+    assert det.levels_n[1] == pytest.approx(0.03 * 692.0) and not det.warnings  # quiet standing is no failure
+    above = f > det.levels_n[1]
     edges = t[np.flatnonzero(np.diff(above.astype(int)))]
     ours = [s[0].touchdown_s, s[0].takeoff_s, s[1].touchdown_s, s[1].takeoff_s]
     # The plain rule also fires on a one-sample 30 N bounce 2-4 ms after the step-off,
