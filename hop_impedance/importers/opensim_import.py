@@ -14,6 +14,20 @@ Both are small tab-separated text formats, parsed here with numpy:
   ``ground_force_1_vx`` / ``ground_force_1_px`` / ``ground_force_1_mx`` or
   ``ground_force_vx`` / ``ground_torque_x``. OpenSim files are SI (N, m, N m)
   with y up.
+
+Real exporters vary (OpenSim, MATLAB tool chains, Vicon Nexus, Motion
+Monitor ...), and OpenSim reads all of these, so this reader does too
+(``test/importers/test_text_variants.py`` builds each variant from a real file):
+
+- line endings ``\n``, ``\r\n`` or ``\r``; a byte-order mark; blank lines
+  anywhere in the header, after ``endheader`` and between data rows;
+- cells separated by tabs (empty cell = NaN, trailing tabs ignored) or, in a
+  line without tabs, by runs of spaces (fixed-width, padded columns);
+- missing values written ``nan``, ``NaN``, ``-nan(ind)``, ``1.#QNAN``,
+  ``-1.#IND`` or left empty;
+- ``endheader`` in any case with surrounding spaces; ``key=value`` header
+  lines with spaces around ``=``; a TRC header whose keys and values are
+  separated by spaces.
 """
 
 from __future__ import annotations
@@ -76,8 +90,42 @@ class MotData:
         return self.values[:, self.columns.index(name)]
 
 
-def _float_cells(cells: list[str], width: int) -> list[float]:
-    out = [float(c) if c.strip() else np.nan for c in cells[:width]]
+#: Spellings of a missing value seen in exported text files (lower case), besides an empty cell.
+NAN_SPELLINGS = frozenset({"nan", "-nan", "+nan", "nan(ind)", "-nan(ind)", "1.#qnan", "-1.#qnan", "1.#ind", "-1.#ind", "na", "n/a"})
+
+
+def _lines(path: Path) -> list[str]:
+    """Text lines of a file with any line ending (\\n, \\r\\n, \\r), without a UTF-8 byte-order mark."""
+    return path.read_text(encoding="utf-8-sig", errors="replace").splitlines()
+
+
+def split_cells(line: str, width: int | None = None) -> list[str]:
+    """Cells of one line: tab-separated (empty cells kept), else whitespace-separated.
+
+    Trailing empty tab cells are dropped beyond ``width`` (all of them when
+    ``width`` is None), so a trailing tab is not a value but an empty last
+    column still is.
+    """
+    if "\t" in line:
+        cells = [c.strip() for c in line.split("\t")]
+        while cells and not cells[-1] and (width is None or len(cells) > width):
+            cells.pop()
+        return cells
+    return line.split()
+
+
+def _number(cell: str, where: str) -> float:
+    text = cell.strip()
+    if not text or text.lower() in NAN_SPELLINGS:
+        return np.nan
+    try:
+        return float(text)
+    except ValueError:
+        raise ValueError(f"{where}: {cell!r} is not a number") from None
+
+
+def _float_cells(cells: list[str], width: int, where: str) -> list[float]:
+    out = [_number(c, where) for c in cells[:width]]
     return out + [np.nan] * (width - len(out))
 
 
@@ -100,23 +148,25 @@ def read_trc(path: str | Path) -> TrcData:
         with the time column (inconsistent rates).
     """
     path = Path(path)
-    lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
-    if len(lines) < 6 or not lines[0].startswith("PathFileType"):
+    lines = [ln for ln in _lines(path) if ln.strip()]
+    if len(lines) < 6 or not lines[0].strip().startswith("PathFileType"):
         raise ValueError(f"{path}: not a TRC file (first line must start with 'PathFileType')")
-    header = dict(zip(lines[1].split("\t"), lines[2].split("\t")))
+    header = dict(zip(split_cells(lines[1]), split_cells(lines[2])))
     try:
         rate = float(header["DataRate"])
-        n_markers = int(header["NumMarkers"])
+        n_markers = int(float(header["NumMarkers"]))
         units = header["Units"].strip()
     except (KeyError, ValueError) as exc:
         raise ValueError(f"{path}: TRC header lacks a valid {exc} entry (DataRate, NumMarkers, Units)") from None
     if units.lower() not in LENGTH_UNITS_M:
         raise ValueError(f"{path}: unknown TRC length unit {units!r}; expected one of {', '.join(LENGTH_UNITS_M)}")
-    labels = tuple(c.strip() for c in lines[3].split("\t")[2:] if c.strip())
+    labels = tuple(c for c in split_cells(lines[3])[2:] if c)
     if len(labels) != n_markers:
         raise ValueError(f"{path}: header says {n_markers} markers but line 4 names {len(labels)}")
     width = 2 + 3 * n_markers
-    rows = [_float_cells(ln.split("\t"), width) for ln in lines[5:] if ln.strip()]
+    # Line 5 names the coordinates (X1 Y1 Z1 ...); some writers leave it out.
+    first = 5 if split_cells(lines[4])[:1] and not _is_number(split_cells(lines[4])[0]) else 4
+    rows = [_float_cells(split_cells(ln), width, f"{path.name} line {k + 1}") for k, ln in enumerate(lines[first:], first)]
     if len(rows) < 2:
         raise ValueError(f"{path}: fewer than 2 data rows")
     data = np.asarray(rows, float)
@@ -139,19 +189,32 @@ def read_mot(path: str | Path) -> MotData:
         If there is no ``endheader`` line or the rows do not match the column names.
     """
     path = Path(path)
-    lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    lines = _lines(path)
     try:
         end = next(i for i, ln in enumerate(lines) if ln.strip().lower() == "endheader")
     except StopIteration:
         raise ValueError(f"{path}: not an OpenSim storage file (no 'endheader' line)") from None
     header = {k.strip(): v.strip() for k, _, v in (ln.partition("=") for ln in lines[:end] if "=" in ln)}
-    columns = tuple(c.strip() for c in lines[end + 1].split("\t") if c.strip())
-    rows = [ln.split() for ln in lines[end + 2 :] if ln.strip()]
+    body = [ln for ln in lines[end + 1 :] if ln.strip()]
+    if not body:
+        raise ValueError(f"{path}: no column names after 'endheader'")
+    columns = tuple(c for c in split_cells(body[0]) if c)
+    if any(_is_number(c) for c in columns):
+        raise ValueError(f"{path}: the first line after 'endheader' must name the columns, found numbers: {body[0][:60]!r}")
+    rows = [split_cells(ln, len(columns)) for ln in body[1:]]
     bad = [i for i, r in enumerate(rows) if len(r) != len(columns)]
     if bad:
         raise ValueError(f"{path}: data row {bad[0] + 1} has {len(rows[bad[0]])} values for {len(columns)} columns")
-    values = np.asarray(rows, float).reshape(len(rows), len(columns))
-    return MotData(columns, values, header)
+    values = np.array([[_number(c, f"{path.name} data row {i + 1}") for c in r] for i, r in enumerate(rows)], float)
+    return MotData(columns, values.reshape(len(rows), len(columns)), header)
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return cell.strip().lower() in NAN_SPELLINGS
+    return True
 
 
 _FORCE_COLUMN = re.compile(r"^(?P<pre>.*)force(?P<suf>.*)_v(?P<ax>[xyz])$")
