@@ -278,3 +278,22 @@ def com_offset_jacobian(chain: Chain, q: np.ndarray) -> np.ndarray:
     """d(COM - toe)/dq, shape (2, 4) (m/rad): how the angles move the COM relative to the toe."""
     jac = com_jacobians(chain, q)
     return np.einsum("i,iak->ak", chain.mass_kg, jac[:, :, 2:]) / chain.total_mass_kg
+
+
+def internal_mass_matrix(chain: Chain, q: np.ndarray) -> np.ndarray:
+    """4 x 4 matrix ``M_int`` with ``0.5 qd^T M_int qd`` the kinetic energy of the segments' motion
+    relative to the whole-body COM (kg m^2).
+
+    By König's theorem the kinetic energy is ``0.5 m v_com^2`` plus this internal part; with the COM at
+    rest the toe moves at ``-d(COM - toe)/dq qd``, so ``M_int = T^T M T`` with ``T = [-J_offset; I]``.
+    """
+    q = np.asarray(q, float)
+    mass, _, _ = equations_of_motion(chain, np.r_[0.0, 0.0, q], np.zeros(N_COORDS))
+    transform = np.vstack([-com_offset_jacobian(chain, q), np.eye(4)])
+    return transform.T @ mass @ transform
+
+
+def internal_kinetic_energy_j(chain: Chain, q: np.ndarray, qd: np.ndarray) -> float:
+    """Kinetic energy of segment motion relative to the whole-body COM (J); see :func:`internal_mass_matrix`."""
+    qd = np.asarray(qd, float)
+    return 0.5 * float(qd @ internal_mass_matrix(chain, q) @ qd)

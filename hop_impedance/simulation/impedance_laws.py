@@ -263,3 +263,48 @@ class CompositeLaw(ImpedanceLaw):
 
     def to_dict(self) -> dict:  # noqa: D102
         return {"type": "composite", "parts": [p.to_dict() for p in self.parts]}
+
+
+@dataclass(frozen=True)
+class TrunkBalance:
+    """Trunk-balance moment at the hip: holds the HAT at its touchdown inclination (hands on the waist).
+
+    The seed's subjects hop with the trunk upright; a passive hip spring cannot do that, because under
+    2.5-3.5 body weights the trunk is an inverted pendulum on the hip stiffer than the Table 2 hip k0
+    (31.9 kg x 3.5 g x 0.38 m ~ 410 N m/rad against 95-175 N m/rad), so it pitches by tenths of a radian.
+    This postural (vestibular) moment acts on the trunk's absolute angle q4, not on the hip angle:
+
+        M_balance = -k (q4 - q4_td) - b dq4/dt      (added to the hip moment, extensor positive)
+
+    where q4_td is the trunk angle at touchdown (a positive hip moment raises q4, see
+    :func:`hop_impedance.simulation.dynamics.joint_generalized_forces`). It is an active moment, not a
+    conservative spring, even with ``b = 0``: acting at the hip it turns the thigh too, so its work is
+    ``int -M omega_hip dt``, not a change of ``k (q4 - q4_td)^2 / 2``. The whole hip moment is the
+    Eq. 3 hip law plus this term; the truth file states both.
+
+    Attributes
+    ----------
+    stiffness_nm_rad : float
+        k (N m/rad), >= 0.
+    damping_nm_s_rad : float
+        b (N m s/rad), >= 0.
+    """
+
+    stiffness_nm_rad: float
+    damping_nm_s_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (self.stiffness_nm_rad >= 0 and self.damping_nm_s_rad >= 0):
+            raise ValueError(f"trunk balance needs k >= 0 and b >= 0, got {self.stiffness_nm_rad}, "
+                             f"{self.damping_nm_s_rad}")
+
+    def hip_moment_nm(self, q4_rad, q4_rate_rad_s, q4_touchdown_rad: float):
+        """Balance moment at the hip (N m, extensor positive), shape of ``q4_rad``."""
+        return (-self.stiffness_nm_rad * (np.asarray(q4_rad, float) - q4_touchdown_rad)
+                - self.damping_nm_s_rad * np.asarray(q4_rate_rad_s, float))
+
+    def to_dict(self) -> dict:
+        """Parameters for the truth file."""
+        return {"type": "trunk_balance", "stiffness_nm_rad": self.stiffness_nm_rad,
+                "damping_nm_s_rad": self.damping_nm_s_rad,
+                "law": "M_hip += -k (q4 - q4_touchdown) - b dq4/dt (q4: HAT absolute angle)"}

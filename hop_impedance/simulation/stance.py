@@ -46,7 +46,7 @@ from hop_impedance.simulation.dynamics import (
     mechanical_energy_j,
 )
 from hop_impedance.simulation.ground import GroundLaw
-from hop_impedance.simulation.impedance_laws import ImpedanceLaw, TouchdownReference
+from hop_impedance.simulation.impedance_laws import ImpedanceLaw, TouchdownReference, TrunkBalance
 
 #: Free coordinates in stance: z_toe, q1..q4 (x_toe fixed).
 STANCE_FREE = np.array([False, True, True, True, True, True])
@@ -126,6 +126,8 @@ class StanceSimulation:
     dense: object
     friction_phases: tuple = ((0.0, 0),)
     friction_coefficient: float | None = None
+    trunk_balance: TrunkBalance | None = None
+    trunk_moments_nm: np.ndarray | None = None
 
     @property
     def slid(self) -> bool:
@@ -148,8 +150,11 @@ class _StanceSystem:
     """
 
     def __init__(self, chain: Chain, law: ImpedanceLaw, ground: GroundLaw, td: TouchdownState,
-                 friction_coefficient: float | None, phases: tuple = ((0.0, 0),)):
+                 friction_coefficient: float | None, phases: tuple = ((0.0, 0),),
+                 trunk_balance: TrunkBalance | None = None):
         self.chain, self.law, self.ground = chain, law, ground
+        self.trunk = trunk_balance
+        self.q4_touchdown = float(td.g[5])
         self.mu = friction_coefficient
         self.phases: list[tuple[float, int]] = list(phases)
         q0 = np.asarray(td.g[2:], float)
@@ -177,6 +182,8 @@ class _StanceSystem:
         rho = JOINT_JACOBIAN @ g[2:] + self.rho_offset
         omega = JOINT_JACOBIAN @ gd[2:]
         moments = self.law.moments_nm(np.float64(t), rho, omega, s, self.ref)
+        if self.trunk is not None:
+            moments = moments + np.array([0.0, 0.0, self.trunk.hip_moment_nm(g[5], gd[5], self.q4_touchdown)])
         fz = self.ground.force_n(g[1], gd[1])
         if sign == 0:
             gdd, constraint = accelerations(self.chain, g, gd, moments, np.array([0.0, fz]), STANCE_FREE)
@@ -271,6 +278,7 @@ def simulate_stance(
     sample_times_s: np.ndarray | None = None,
     collapse_height_m: float = 0.3,
     friction_coefficient: float | None = None,
+    trunk_balance: TrunkBalance | None = None,
 ) -> StanceSimulation:
     """Integrate one stance forward from a touchdown state.
 
@@ -298,6 +306,8 @@ def simulate_stance(
         Coulomb friction coefficient of the sole (module docstring); None (default)
         = the toe never slides. Hopping trials use ``DEFAULT_FRICTION_COEFFICIENT``
         (:class:`~hop_impedance.simulation.hopping_trial.HoppingConfig`).
+    trunk_balance : TrunkBalance or None
+        Postural moment on the trunk added at the hip (None: the hip carries the law only).
 
     Returns
     -------
@@ -307,7 +317,7 @@ def simulate_stance(
         raise ValueError(f"touchdown toe x velocity must be 0 under the no-slip constraint, got {touchdown.gd[0]}")
     if friction_coefficient is not None and not friction_coefficient > 0:
         raise ValueError(f"friction_coefficient must be positive (or None for no slipping), got {friction_coefficient}")
-    system = _StanceSystem(chain, law, ground, touchdown, friction_coefficient)
+    system = _StanceSystem(chain, law, ground, touchdown, friction_coefficient, trunk_balance=trunk_balance)
     y = np.concatenate([touchdown.g, touchdown.gd, np.zeros(law.n_states)])
 
     def lift_off(t, y):  # law force reaches zero while rising
@@ -401,7 +411,8 @@ def resample_stance(chain: Chain, law: ImpedanceLaw, ground: GroundLaw, touchdow
                     stance: StanceSimulation, t_since_td: np.ndarray) -> StanceSimulation:
     """``stance`` (integrated by :func:`simulate_stance` with these inputs) at other times since
     touchdown (s), from its dense output without re-integration; times are clipped to the stance."""
-    system = _StanceSystem(chain, law, ground, touchdown, stance.friction_coefficient, stance.friction_phases)
+    system = _StanceSystem(chain, law, ground, touchdown, stance.friction_coefficient, stance.friction_phases,
+                           stance.trunk_balance)
     t = np.clip(np.asarray(t_since_td, float), 0.0, stance.duration_s)
     return _collect(system, t, stance.dense(t).T, stance.end_reason, stance.dense)
 
@@ -415,14 +426,20 @@ def _collect(system: _StanceSystem, times: np.ndarray, ys: np.ndarray, end: str,
         g, gd, gdd, f, m, r, w, s, _ = system.evaluate(t, y)
         out["g"][i], out["gd"][i], out["gdd"][i] = g, gd, gdd
         grf[i], mom[i], rho[i], omg[i], states[i] = f, m, r, w, s
+    trunk = None
+    if system.trunk is not None:
+        trunk = np.zeros((n, 3))
+        trunk[:, 2] = system.trunk.hip_moment_nm(out["g"][:, 5], out["gd"][:, 5], system.q4_touchdown)
     return StanceSimulation(times, out["g"], out["gd"], out["gdd"], grf, mom, rho, omg, states, end, system.ref, dense,
-                            tuple(system.phases), system.mu)
+                            tuple(system.phases), system.mu, system.trunk, trunk)
 
 
 def stance_energy_j(chain: Chain, law: ImpedanceLaw, ground: GroundLaw, stance: StanceSimulation) -> np.ndarray:
     """Total mechanical energy (J) at each sample: kinetic + gravity + joint springs + surface.
 
-    Only defined for conservative laws (see :meth:`ImpedanceLaw.elastic_energy_j`).
+    Only defined for conservative laws (see :meth:`ImpedanceLaw.elastic_energy_j`). A trunk-balance
+    moment is not conservative (it acts at the hip, so it also does work on the thigh): its work,
+    ``int -M_balance omega_hip dt``, is not in this total.
     """
     kin_pot = np.array([sum(mechanical_energy_j(chain, g, gd)) for g, gd in zip(stance.g, stance.gd)])
     return kin_pot + law.elastic_energy_j(stance.rho_rad, stance.ref) + ground.stored_energy_j(stance.g[:, 1])

@@ -16,8 +16,11 @@ Layout (format ``hop_impedance.simulation.truth/1``)
   ``omega0_rad_s`` at touchdown; ``activation`` and ``push_off`` where
   present), and ``samples``: the true joint angles (rad), velocities (rad/s),
   net moments (N m, extensor positive), the same split into the Eq. 3 part
-  (``eq3_moments_nm``, incl. activation) and the push-off part
-  (``push_off_moments_nm``), and GRF ``[Fx, Fz]`` (N) at every force-plate
+  (``eq3_moments_nm``, incl. activation), the push-off part
+  (``push_off_moments_nm``) and the trunk-balance part at the hip
+  (``trunk_balance_moments_nm``, zero without one; its law and the touchdown trunk
+  angle q4 are in the stance's ``trunk_balance``: the whole hip law is the
+  Eq. 3 hip law plus that term), and GRF ``[Fx, Fz]`` (N) at every force-plate
   sample inside the stance (``t_s`` in recording time).
 
 Numbers in ``samples`` are rounded to 7 significant digits to keep files small.
@@ -99,6 +102,8 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
         "impedance": impedance,
         "activation": None if eq3 is None or eq3.activation is None else vars(eq3.activation).copy(),
         "push_off": None if push is None else push.to_dict(),
+        "trunk_balance": None if st.trunk_balance is None else {**st.trunk_balance.to_dict(),
+                                                                "q4_touchdown_rad": float(rec.touchdown.g[5])},
         "samples": {
             "rate_hz": rate,
             "t_s": _round(t_in),
@@ -107,6 +112,8 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
             "moments_nm": _round(st.moments_nm),
             "eq3_moments_nm": _round(_part_moments(eq3, st)),
             "push_off_moments_nm": _round(_part_moments(push, st)),
+            "trunk_balance_moments_nm": _round(st.trunk_moments_nm if st.trunk_moments_nm is not None
+                                               else np.zeros_like(st.moments_nm)),
             "grf_n": _round(st.grf_n),
         },
     }
@@ -145,7 +152,11 @@ def trial_truth(
             "speed_sd": cfg.speed_sd, "push_sd": cfg.push_sd, "placement_gain_s": cfg.placement_gain_s,
             "lead_in_s": cfg.lead_in_s, "rtol": cfg.rtol, "atol": cfg.atol,
             "friction_coefficient": cfg.friction_coefficient,
-            "flight_model": "COM ballistic, segment angles prescribed (quintic); force plate zero",
+            "flight_model": ("COM ballistic, segment angles prescribed (quintic) to rest at touchdown; force plate zero"
+                             if cfg.flight == "prescribed" else
+                             "COM ballistic, segment angles quintic to touchdown rates that keep the take-off's "
+                             "segment kinetic energy plus the springs' returned energy; force plate zero"),
+            "trunk_balance": None if cfg.trunk_balance is None else cfg.trunk_balance.to_dict(),
             "horizontal_contact": ("no-slip kinematic constraint at the toe while |Fx| <= mu Fz, Coulomb sliding "
                                    "beyond" if cfg.friction_coefficient is not None
                                    else "no-slip kinematic constraint at the toe"),

@@ -153,7 +153,8 @@ def test_truth_events_match_force_plate_and_joint_samples(clean_recording):
         assert t[k] - s["touchdown_s"] == pytest.approx(0.0, abs=1.01e-3)
         assert s["touchdown_stamp_ns"] == rec.start_ns + round(s["touchdown_s"] * 1e9)
         m = np.array(s["samples"]["moments_nm"])
-        parts = np.array(s["samples"]["eq3_moments_nm"]) + np.array(s["samples"]["push_off_moments_nm"])
+        parts = np.array(s["samples"]["eq3_moments_nm"]) + np.array(s["samples"]["push_off_moments_nm"]) + np.array(
+            s["samples"]["trunk_balance_moments_nm"])
         assert np.abs(m - parts).max() < 1e-3
         assert set(s["impedance"]) == {"ankle", "knee", "hip"}
         assert s["impedance"]["ankle"]["k0"] == pytest.approx(301.4)
