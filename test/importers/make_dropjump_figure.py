@@ -29,9 +29,10 @@ def main() -> int:
     j = st.joints
     t_abs = j.time_s + st.touchdown_s
     ik = read_mot(D / "Subject4_DJ1_ik_mot.txt")
-    from hop_impedance.impedance.stance_fit import fit_joint_stance
+    from hop_impedance.impedance.recording_fits import fit_stance_joints
 
-    fits = [fit_joint_stance(j.time_s - j.time_s[0], j.angle_rad[:, k], j.angular_velocity_rad_s[:, k], j.moment_nm[:, k]) for k in range(3)]
+    # The fits `hop-impedance analyze` publishes (fit options from the analysis' cut-off).
+    fits = list(fit_stance_joints(st).values())
     fig, ax = plt.subplots(2, 2, figsize=(11, 7), constrained_layout=True)
     t = rec.force.stamp_ns / 1e9
     ax[0, 0].plot(t, rec.force.force_n[:, 2] / (60 * 9.81), "k", label="Fz (both plates)")

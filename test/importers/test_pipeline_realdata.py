@@ -71,27 +71,21 @@ def test_moments_plausible_for_a_drop_jump(landing):
 
 
 def test_impedance_profiles_for_the_landing(landing):
-    stance_fit = pytest.importorskip("hop_impedance.impedance.stance_fit", reason="impedance fits not available yet")
-    j = landing.joints
-    fits = [
-        stance_fit.fit_joint_stance(j.time_s - j.time_s[0], j.angle_rad[:, k], j.angular_velocity_rad_s[:, k], j.moment_nm[:, k])
-        for k in range(3)
-    ]
-    assert all(f.status in ("solved", "rejected") for f in fits)
-    # A fit is either a spring (some stiffness term kept) or an explicit rejection:
-    # at the ankle of this long drop-jump contact the F-tests keep no stiffness term.
-    for fit in fits:
-        if fit.status == "solved":
-            assert any(t.startswith("k") for t in fit.terms), fit.terms
-        else:
-            assert fit.rejection_reason
-    ankle = fits[0]
-    assert ankle.status == "rejected" and "kept no stiffness term" in ankle.rejection_reason
-    knee, hip = fits[1], fits[2]
-    for fit in (knee, hip):
-        assert fit.rejection_reason is None
-        assert fit.r_squared > 0.5
-        assert np.nanmean(fit.stiffness) > 0  # N m/rad
+    """The fits ``hop-impedance analyze`` publishes for this stance (recording_fits.fit_stance_joints).
+
+    Measured (docs/importing.md): ankle k0 + k1 kept, R^2 0.30; knee R^2 0.67; hip R^2 0.84.
+    The seed's hopping model describes the knee and hip of this long drop-jump
+    contact; at the ankle it keeps a spring that explains under half the moment.
+    """
+    recording_fits = pytest.importorskip("hop_impedance.impedance.recording_fits", reason="impedance fits not available yet")
+    fits = recording_fits.fit_stance_joints(landing)
+    for fit in fits.values():
+        assert fit.status == "solved" and fit.rejection_reason is None
+        assert any(t.startswith("k") for t in fit.terms), fit.terms  # a spring, not an intercept
+        assert np.nanmin(fit.stiffness) > -1e-9  # N m/rad, held non-negative
+    ankle, knee, hip = fits["ankle"], fits["knee"], fits["hip"]
+    assert 0.2 < ankle.r_squared < 0.5, ankle.r_squared
+    assert knee.r_squared > 0.5 and hip.r_squared > 0.75, (knee.r_squared, hip.r_squared)
 
 
 @pytest.mark.skipif(not CMJ.exists(), reason="shared data set bmc_cmj_grf not present")
