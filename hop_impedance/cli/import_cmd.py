@@ -44,7 +44,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--markers",
         default=None,
         help="marker mapping: shipped name (opencap_right, opencap_left, plugin_gait_right, plugin_gait_left, "
-        "contract) or a YAML file; default: the first shipped mapping whose six markers are all present",
+        "qualisys_isb_right, qualisys_isb_left, contract) or a YAML file (virtual markers: docs/importing.md); "
+        "default: the first shipped mapping whose six markers are all present",
     )
     p.add_argument("--up", default=None, help="lab axis pointing up, e.g. +Z or +Y (default: from the file / detected)")
     p.add_argument(

@@ -390,6 +390,8 @@ def compute(
             pos = hjc_harrington2007(rasi, lasi, rear, o["side"])
             return pos, f"{DESCRIPTIONS[vm.method]}, {o['side']}, from {used}"
         kwargs, extra = _davis_options(vm, get, params)
+        # knee/ankle only feed a leg length the file lacks (the note says so)
+        used = ", ".join(labels[i] for r, idx in picked.items() if r not in ("knee", "ankle") for i in idx)
         pos = hjc_davis1991(rasi, lasi, rear, o["side"], **kwargs)
         return pos, f"{DESCRIPTIONS[vm.method]}, {o['side']}, from {used} ({'; '.join(extra)})"
     if vm.method == "mean":
