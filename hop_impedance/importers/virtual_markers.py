@@ -70,7 +70,11 @@ Methods
     head marker's depth below the vertex used by the body model
     (:mod:`hop_impedance.biomech.body_model`), so the HAT line and its
     inertia match what the model expects. Inputs ``c7`` and ``hips`` (two hip
-    joint centres, or any points whose mean is mid-hip).
+    joint centres, or any points whose mean is mid-hip). It follows the
+    trunk, not the head: on real Plug-in Gait files it is at the head
+    markers' height along the trunk line but 13-18 cm behind the side of the
+    head (the head sits forward of the trunk line; test_real_c3d.py), so
+    use head markers when the set has them.
 """
 
 from __future__ import annotations

@@ -140,3 +140,32 @@ class TestQualisys:
         # Anatomy: the femoral head centre lies medial of the greater trochanter
         # tip (here +y = left = medial for the right leg) by several centimetres.
         assert 40.0 < med[1] < 110.0
+
+
+@pytest.fixture(scope="module")
+def pig_static_c3d(tmp_path_factory) -> Path:
+    return _fetched(tmp_path_factory, (PYCGM[0], PYCGM[1], "SampleData/Test_Files/Static_trial.c3d"))
+
+
+@pytest.mark.parametrize("which", ["static", "stairs"])
+def test_head_point_beyond_c7_follows_the_trunk_not_the_head(request, which):
+    """hat_top_c7 against the side of the head (mean of RFHD, RBHD) on Plug-in Gait files.
+
+    Along the trunk line the de Leva proportions put the point at the head
+    marker's height; across it the head sits forward of the trunk line, so the
+    rule gives the trunk's direction, not the head's (documented in docs/importing.md).
+    """
+    from hop_impedance.importers.marker_mapping import find_label, with_virtual_markers
+
+    path = request.getfixturevalue("pig_static_c3d" if which == "static" else "pig_c3d")
+    s = c3d_session(path)
+    labels, pos, _ = with_virtual_markers(s.marker_labels, s.marker_positions_m, load_marker_mapping("plugin_gait_right"), s.parameters)
+    get = {n: pos[:, find_label(labels, n)] for n in ("HAT_top_c7", "RHEAD_side", "C7", "RHJC_davis", "LHJC_davis")}
+    axis = get["C7"] - 0.5 * (get["RHJC_davis"] + get["LHJC_davis"])
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    d = get["HAT_top_c7"] - get["RHEAD_side"]
+    along = np.sum(d * axis, axis=1)
+    across = np.linalg.norm(d - along[:, None] * axis, axis=1)
+    print(f"\n{which}: C7-line point - side of head: along the trunk {1e3 * np.nanmedian(along):.0f} mm, across {1e3 * np.nanmedian(across):.0f} mm")
+    assert abs(np.nanmedian(along)) < 0.06  # height along the trunk: within 6 cm (measured 2 and 53 mm)
+    assert 0.08 < np.nanmedian(across) < 0.25  # the head is forward of the trunk line (measured 126 and 183 mm)
