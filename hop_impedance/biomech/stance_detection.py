@@ -57,7 +57,7 @@ Rules (defaults in :class:`DetectorOptions`, the one place they are set)
 from __future__ import annotations
 
 import collections
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -139,6 +139,25 @@ class DetectorOptions:
         to = max(self.takeoff_n, self.takeoff_bw * bw, self.noise_factor * noise_sd_n)
         td = max(self.touchdown_n, self.touchdown_bw * bw, 2 * self.noise_factor * noise_sd_n)
         return td, to
+
+    @classmethod
+    def from_settings(cls, settings: list[str] | None) -> "DetectorOptions":
+        """Options from ``NAME=VALUE`` strings (the command line's ``--detector``); other fields keep their defaults.
+
+        Raises ValueError with one line naming the bad setting and the valid names.
+        """
+        names = [f.name for f in fields(cls) if f.name != "event_level_n"] + ["event_level_n"]
+        values: dict[str, float] = {}
+        for item in settings or []:
+            name, sep, value = item.partition("=")
+            name = name.strip()
+            if not sep or name not in names:
+                raise ValueError(f"detector setting {item!r}: expected NAME=VALUE with NAME one of {', '.join(names)}")
+            try:
+                values[name] = float(value)
+            except ValueError:
+                raise ValueError(f"detector setting {item!r}: {value!r} is not a number") from None
+        return cls(**values)
 
     @property
     def level_n(self) -> float:

@@ -27,6 +27,9 @@ def register(subparsers) -> None:
     p.add_argument("--segments", metavar="YAML", help="per-segment overrides of the body model")
     p.add_argument("--cutoff-hz", type=float, default=12.0, help="low-pass cut-off for markers and forces (Hz, default 12)")
     p.add_argument("--max-gap-s", type=float, default=0.05, help="longest marker gap filled (s, default 0.05)")
+    p.add_argument("--detector", action="append", metavar="NAME=VALUE",
+                   help="stance detection setting (repeatable), e.g. takeoff_n=15; names and defaults: "
+                        "DetectorOptions in biomech/stance_detection.py, the same as the nodes' parameters")
     p.add_argument("--no-fit", action="store_true", help="skip the per-stance impedance fits (no 'fit' objects)")
     p.add_argument("--report", metavar="DIR",
                    help="write Table 2/3 layouts (CSV, Markdown, Wilcoxon tests) and PNG figures of the fits; "
@@ -105,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
 
     from hop_impedance.biomech.analysis import AnalysisOptions, analysis_to_json, analyze_recording
     from hop_impedance.biomech.body_model import load_overrides
+    from hop_impedance.biomech.stance_detection import DetectorOptions
     from hop_impedance.cli.json_output import json_output
     from hop_impedance.impedance.report import fit_records, write_report
     from hop_impedance.input_checks import InputChecks
@@ -121,6 +125,7 @@ def run(args: argparse.Namespace) -> int:
         force_cutoff_hz=args.cutoff_hz,
         max_gap_s=args.max_gap_s,
         overrides=load_overrides(args.segments) if args.segments else None,
+        detector=DetectorOptions.from_settings(args.detector),
     )
     with json_output(args.json) as write_json:
         docs, records, conditions = [], [], []

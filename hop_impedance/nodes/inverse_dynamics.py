@@ -26,6 +26,9 @@ Thin adapter around :class:`hop_impedance.biomech.stages.StanceAnalysisStage`:
   stance, reliable) and, if ``publish_frames``, one ``JointKinetics`` per
   force frame of the stance on ``/joint_kinetics`` (published after the
   analysis of the stance, since the zero-lag filters need the whole window).
+- Stances are found by the same detector stage as ``stance_detector``'s, with
+  the same parameters (:func:`stance_detector.declare_detector_options`) and
+  body weight, so the analysed stances are the published ``/stance/events``.
 - ``low_latency`` selects the stage's low-latency mode (window ends
   ``post_pad_s`` after take-off); default false = results equal to
   ``hop-impedance analyze``.
@@ -49,6 +52,7 @@ from hop_impedance.nodes.common import (
     ReorderBuffer, declare, declare_stream_parameters, seconds_to_ns, set_stamp, stamp_ns, wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
+from hop_impedance.nodes.stance_detector import declare_detector_options
 from hop_impedance.recording import FORCE_TOPIC, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, MarkerSeries, Subject
 from hop_impedance_msgs.msg import JointKinetics, MarkerArray, StanceKinetics, SubjectInfo
 
@@ -64,9 +68,12 @@ class InverseDynamicsNode(Node):
         self.sex = declare(self, "sex", "female", "de Leva table: female or male (not in SubjectInfo)")
         low_latency = declare(self, "low_latency", False, "analyse at take-off + post_pad_s instead of at the next touchdown")
         post_pad = declare(self, "post_pad_s", 0.05, "low-latency mode: data used after take-off (s)")
-        cutoff = declare(self, "cutoff_hz", 12.0, "low-pass cut-off of markers and forces (Hz)")
-        max_gap = declare(self, "max_gap_s", 0.05, "longest marker gap filled by interpolation (s)")
-        self.options = AnalysisOptions(marker_cutoff_hz=cutoff, force_cutoff_hz=cutoff, max_gap_s=max_gap)
+        defaults = AnalysisOptions()
+        cutoff = declare(self, "cutoff_hz", defaults.marker_cutoff_hz, "low-pass cut-off of markers and forces (Hz)")
+        max_gap = declare(self, "max_gap_s", defaults.max_gap_s, "longest marker gap filled by interpolation (s)")
+        # the stance detector's parameters and defaults, so both nodes find the same stances (one detector)
+        self.options = AnalysisOptions(marker_cutoff_hz=cutoff, force_cutoff_hz=cutoff, max_gap_s=max_gap,
+                                       detector=declare_detector_options(self))
         self.post_pad_s = post_pad if low_latency else None
         self.subject: Subject | None = None
         self.stage: StanceAnalysisStage | None = None

@@ -7,13 +7,22 @@ machine as the batch analysis) and publishes ``StanceEvent`` on
 ``reorder_window_s`` of stamp time before detection; samples arriving later
 than that are counted (``late_dropped``) and skipped.
 
+One detector: ``inverse_dynamics`` runs the same stage on the same samples
+with the same parameters (:func:`declare_detector_options`: every field of
+:class:`DetectorOptions`, default from the dataclass, set once for both nodes
+under ``/**`` in ``config/pipeline.yaml``) and the same body weight (from
+``/subject``, transient-local; force samples wait here until it is in, as in
+``inverse_dynamics``), so the published events are the stances it analyses
+(test/ros/test_one_detector.py).
+
 Parameters (``config/pipeline.yaml``): ``reliable_inputs``,
-``reorder_window_s``, ``process_period_s``, ``diagnostics_period_s``,
-``touchdown_n``, ``takeoff_n``, ``min_flight_s``.
+``reorder_window_s``, ``process_period_s``, ``diagnostics_period_s``, the
+detector fields (``touchdown_n``, ``takeoff_n``, ``touchdown_bw``, ...).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -29,8 +38,8 @@ from hop_impedance.nodes.common import (
     set_stamp, stamp_ns, wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
-from hop_impedance.recording import FORCE_TOPIC
-from hop_impedance_msgs.msg import StanceEvent
+from hop_impedance.recording import FORCE_TOPIC, GRAVITY_M_S2, SUBJECT_TOPIC
+from hop_impedance_msgs.msg import StanceEvent, SubjectInfo
 
 
 class StanceDetectorNode(Node):
@@ -39,12 +48,9 @@ class StanceDetectorNode(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("stance_detector", **kwargs)
         reliable, reorder_s, period, diag = declare_stream_parameters(self, "the detector")
-        opts = DetectorOptions(
-            touchdown_n=declare(self, "touchdown_n", 40.0, "touchdown threshold above the flight baseline (N)"),
-            takeoff_n=declare(self, "takeoff_n", 20.0, "take-off threshold above the flight baseline (N)"),
-            min_flight_s=declare(self, "min_flight_s", 0.05, "a dip must last this long to be a flight (s)"),
-        )
-        self.stage = StanceDetectorStage(opts)
+        self.detector_options = declare_detector_options(self)
+        self.stage: StanceDetectorStage | None = None  # once /subject gives the body weight
+        self.waiting: list[tuple[np.ndarray, np.ndarray]] = []  # released samples before that
         self.t0_ns: int | None = None
         self.buffer = ReorderBuffer(int(reorder_s * 1e9))
         self.tracker = InputTracker(FORCE_TOPIC)
@@ -55,6 +61,7 @@ class StanceDetectorNode(Node):
         self.pub = self.create_publisher(StanceEvent, EVENTS_TOPIC, result_qos())
         self.create_subscription(WrenchStamped, FORCE_TOPIC, self._on_wrench, input_qos(reliable), raw=True)
         self.create_subscription(Header, END_TOPIC, self._on_end, latched_qos())
+        self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
         self.progress = ProgressReporter(self, {FORCE_TOPIC: self.tracker})
         self.diagnostics = Diagnostics(self, diag, self._diag_values)
         self.end_timeout_s = declare(self, "end_timeout_s", 3.0, "after end-of-stream, wait this long (s) for missing data")
@@ -66,6 +73,13 @@ class StanceDetectorNode(Node):
         ns, (_, _, fz, _, _, _) = wrench_from_cdr(cdr)
         self.tracker.note(ns)
         self.buffer.add(ns, fz)
+
+    def _on_subject(self, msg: SubjectInfo) -> None:
+        if self.stage is None:
+            self.stage = StanceDetectorStage(self.detector_options, float(msg.body_mass) * GRAVITY_M_S2)
+            for t, fz in self.waiting:
+                self._detect(t, fz)
+            self.waiting = []
 
     def _tick(self) -> None:
         self.process()
@@ -81,13 +95,26 @@ class StanceDetectorNode(Node):
         if self.t0_ns is None:
             self.t0_ns = int(ns[0])
         t = (ns - self.t0_ns) * 1e-9
+        if self.stage is None:
+            self.waiting.append((t, fz))
+            if t[-1] - self.waiting[0][0][0] > SUBJECT_WAIT_S:  # no /subject: detect with the absolute floors
+                self.get_logger().warning(f"no {SUBJECT_TOPIC} after {SUBJECT_WAIT_S:.0f} s of force data: "
+                                          "stance thresholds without the body weight (absolute floors)")
+                self.stage = StanceDetectorStage(self.detector_options)
+                waiting, self.waiting = self.waiting, []
+                for tw, fw in waiting:
+                    self._detect(tw, fw)
+        else:
+            self._detect(t, fz)
+        self.progress.processed_ns[FORCE_TOPIC] = int(ns[-1])
+        self.diagnostics.sample_ns = int(ns[-1])
+
+    def _detect(self, t: np.ndarray, fz: np.ndarray) -> None:
         keep = self._recent_t > t[-1] - 3.0
         self._recent_t = np.concatenate([self._recent_t[keep], t])
         self._recent_fz = np.concatenate([self._recent_fz[keep], fz])
         for ev in self.stage.push((t, fz)):
             self._publish(ev)
-        self.progress.processed_ns[FORCE_TOPIC] = int(ns[-1])
-        self.diagnostics.sample_ns = int(ns[-1])
 
     def _on_end(self, msg: Header) -> None:
         """End of a replayed stream: finish once data up to its stamp are in (or after ``end_timeout_s``)."""
@@ -104,15 +131,21 @@ class StanceDetectorNode(Node):
     def _finish(self) -> None:
         """End of a replayed stream: flush once every sample up to its last stamp is in."""
         self.process(everything=True)
-        for ev in self.stage.flush():
-            self._publish(ev)
+        if self.stage is None and self.waiting:
+            self.stage = StanceDetectorStage(self.detector_options)
+            waiting, self.waiting = self.waiting, []
+            for tw, fw in waiting:
+                self._detect(tw, fw)
+        if self.stage is not None:
+            for ev in self.stage.flush():
+                self._publish(ev)
         self.diagnostics.publish()  # the final counts, at once
         self.progress.finished = True
         self.progress.publish()
 
     def _publish(self, ev) -> None:
         """One StanceEvent; a take-off carries its stance's contact time, peak force and flight before."""
-        msg = StanceEvent(threshold_n=float(self.stage.detector.options.takeoff_n), complete=True,
+        msg = StanceEvent(threshold_n=float(self.stage.detector.levels_n[1]), complete=True,
                           flight_time_before_s=math.nan)
         stances = list(self.stage.stances)
         pending = pending_stance(self.stage.detector)
@@ -146,6 +179,41 @@ class StanceDetectorNode(Node):
         t = self.tracker
         return {"force_received": t.received, "force_rate_hz": t.rate_hz, "force_lost": t.lost,
                 "force_out_of_order": t.late, "force_late_dropped": self.buffer.dropped, "events_published": self.events_out}
+
+
+#: Force data (s) the detector waits for ``/subject`` before it detects without the body weight.
+SUBJECT_WAIT_S = 30.0
+
+_DETECTOR_PARAMETERS = {
+    "touchdown_n": "touchdown level floor above the flight baseline (N)",
+    "takeoff_n": "take-off level floor above the flight baseline (N)",
+    "touchdown_bw": "touchdown level as a fraction of body weight",
+    "takeoff_bw": "take-off level as a fraction of body weight",
+    "noise_factor": "take-off level at least this many flight-noise SDs (touchdown twice)",
+    "min_stance_s": "shorter stances are rejected (s)",
+    "min_flight_s": "a dip below the take-off level must last this long to be a flight (s)",
+    "settle_s": "flight samples this close to take-off are left out of the baseline (s)",
+    "max_stance_s": "a steady 'stance' far from body weight longer than this is a detector failure (s)",
+    "steady_s": "window of the steadiness test (s)",
+    "steady_sd_n": "floor of the steadiness SD limit (N)",
+    "standing_tolerance_bw": "steady force within this many body weights of 1 BW is quiet standing",
+    "start_flight_max_n": "a first sample below this (N) starts the recording in flight",
+    "start_flight_max_bw": "... or below this fraction of body weight, if larger",
+}
+
+
+def declare_detector_options(node: Node) -> DetectorOptions:
+    """Declare every :class:`DetectorOptions` field as a parameter (default from the dataclass) and return the options.
+
+    The one place the nodes take their detection settings from; ``event_level_n``
+    (None = the take-off level) is not a ROS parameter.
+    """
+    defaults = DetectorOptions()
+    values = {}
+    for f in dataclasses.fields(DetectorOptions):
+        if f.name != "event_level_n":  # a new field without a description here is a KeyError, not a silent default
+            values[f.name] = float(declare(node, f.name, float(getattr(defaults, f.name)), _DETECTOR_PARAMETERS[f.name]))
+    return DetectorOptions(**values)
 
 
 def main(args=None) -> None:
