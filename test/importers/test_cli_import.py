@@ -31,6 +31,8 @@ def test_trc_mot(tmp_path, capsys):
     assert main(args + ["--mass-kg", "60", "--out", str(tmp_path / "r.mcap")]) == 0
     out = capsys.readouterr().out
     assert "subject faces lab" in out and "269 frames at 100 Hz" in out
+    # The terminal says which label fed each contract marker.
+    assert "note: marker map opencap_right: hip <- R_HJC" in out and "note: marker map opencap_right: head <- R_Shoulder" in out
     assert recording_io.load_recording(tmp_path / "r.mcap").subject.body_mass_kg == 60.0
 
 
