@@ -151,8 +151,21 @@ def with_virtual_markers(
     mapping: MarkerMapping,
     parameters: dict[str, float] | None = None,
     sex: str = "female",
+    only_needed: bool = True,
 ) -> tuple[list[str], np.ndarray, dict[str, str]]:
-    """Append the mapping's buildable virtual markers to a session's markers.
+    """Append the mapping's virtual markers to a session's markers.
+
+    With ``only_needed`` (default) only those that feed a contract marker
+    (directly or as an input of one that does) are built, so a rule the
+    import does not use cannot stop it (e.g. a Davis hip joint centre without
+    a leg length in a file that exports its own); otherwise every buildable one.
+
+    Raises
+    ------
+    MissingMarkersError
+        If a contract marker has none of its labels (named, as :func:`resolve_labels`).
+    ValueError
+        If a needed virtual marker cannot be built (e.g. no leg length).
 
     Returns
     -------
@@ -162,15 +175,32 @@ def with_virtual_markers(
         Virtual marker name -> how it was built (method, citation, inputs).
     """
     out_labels, out_pos, notes = list(labels), positions, {}
+    needed = _needed_virtual(labels, mapping) if only_needed else {vm.name for vm in mapping.virtual}
     for vm in mapping.virtual:
         picked = resolve_inputs(vm, out_labels, find_label)
-        if picked is None:
+        if picked is None or vm.name not in needed:
             continue
         pos, note = compute(vm, out_labels, out_pos, picked, parameters, sex)
         out_labels.append(vm.name)
         out_pos = np.concatenate([out_pos, pos[:, None, :]], axis=1)
         notes[vm.name] = note
     return out_labels, out_pos, notes
+
+
+def _needed_virtual(labels: list[str] | tuple[str, ...], mapping: MarkerMapping) -> set[str]:
+    """Names of the virtual markers that feed the contract markers, inputs of inputs included."""
+    avail = available_labels(labels, mapping)
+    virtual = {vm.name: vm for vm in mapping.virtual}
+    stack = [avail[i] for i in resolve_labels(labels, mapping).values() if avail[i] in virtual]
+    need: set[str] = set()
+    while stack:
+        name = stack.pop()
+        if name in need:
+            continue
+        need.add(name)
+        for idx in (resolve_inputs(virtual[name], avail, find_label) or {}).values():
+            stack += [avail[i] for i in idx if avail[i] in virtual]
+    return need
 
 
 def source_notes(labels: list[str], mapping: MarkerMapping, virtual_notes: dict[str, str]) -> list[str]:

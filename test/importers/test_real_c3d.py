@@ -159,7 +159,9 @@ def test_head_point_beyond_c7_follows_the_trunk_not_the_head(request, which):
 
     path = request.getfixturevalue("pig_static_c3d" if which == "static" else "pig_c3d")
     s = c3d_session(path)
-    labels, pos, _ = with_virtual_markers(s.marker_labels, s.marker_positions_m, load_marker_mapping("plugin_gait_right"), s.parameters)
+    labels, pos, _ = with_virtual_markers(
+        s.marker_labels, s.marker_positions_m, load_marker_mapping("plugin_gait_right"), s.parameters, only_needed=False
+    )
     get = {n: pos[:, find_label(labels, n)] for n in ("HAT_top_c7", "RHEAD_side", "C7", "RHJC_davis", "LHJC_davis")}
     axis = get["C7"] - 0.5 * (get["RHJC_davis"] + get["LHJC_davis"])
     axis /= np.linalg.norm(axis, axis=1, keepdims=True)

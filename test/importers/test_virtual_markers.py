@@ -147,3 +147,25 @@ class TestMaps:
         doc = dict(PELVIS_MAP, virtual_markers={"X": entry})
         with pytest.raises(ValueError, match=message):
             mapping_from_dict(doc)
+
+
+def test_an_unused_rule_that_cannot_be_built_does_not_stop_the_import():
+    doc = dict(
+        PELVIS_MAP,
+        virtual_markers={
+            "RHJC_d": {
+                "method": "davis1991",
+                "side": "right",
+                "inputs": {"rasi": "RASI", "lasi": "LASI", "sacrum": "SACR"},
+                "leg_length_parameter": "RLegLength",
+            },
+            "HEAD": PELVIS_MAP["virtual_markers"]["HEAD"],
+        },
+    )
+    doc["markers"] = dict(PELVIS_MAP["markers"], hip=["RGT", "RHJC_d"])
+    mapping = mapping_from_dict(doc)
+    labels, pos = TestMaps()._session()
+    with_trochanter = with_virtual_markers(labels + ["RGT"], np.concatenate([pos, pos[:, :1]], axis=1), mapping)
+    assert "RHJC_d" not in with_trochanter[0]  # not needed: not built
+    with pytest.raises(ValueError, match="RHJC_d' \\(davis1991\\): no leg length"):
+        with_virtual_markers(labels, pos, mapping)  # needed, and the file has no RLegLength
