@@ -159,7 +159,7 @@ class PlateCombinerStage:
         origin_m=(0.0, 0.0, 0.0),
         max_skew_ns: int = 600_000,
         jitter_ns: int = 200_000,
-        wait_ns: int = 50_000_000,
+        wait_ns: int = 500_000_000,
     ) -> None:
         if len(layouts) < 1:
             raise ValueError("plate combiner: at least one plate is needed")

@@ -48,13 +48,12 @@ import math
 from geometry_msgs.msg import Point
 from rclpy.node import Node
 
+from hop_impedance.io.recording_io import LAB_FRAME_ID
 from hop_impedance.nodes.common import Diagnostics, InputTracker, declare, stamp_ns
 from hop_impedance.nodes.qos import input_qos
 from hop_impedance.recording import MARKER_NAMES, MARKER_TOPIC
 from hop_impedance_msgs.msg import MarkerArray
 from mocap4r2_msgs.msg import Marker, Markers
-
-LAB_FRAME_ID = "lab"
 
 
 class MarkerIdentities:

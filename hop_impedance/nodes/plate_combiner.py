@@ -49,14 +49,13 @@ from rclpy.node import Node
 from std_msgs.msg import Header
 
 from hop_impedance.biomech.plate_combining import PlateCombinerStage, PlateLayout
+from hop_impedance.io.recording_io import FORCE_FRAME_ID
 from hop_impedance.nodes.common import (
     END_TOPIC, Diagnostics, InputTracker, ReorderBuffer, declare, declare_stream_parameters, set_stamp, stamp_ns,
     wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import input_qos, latched_qos
 from hop_impedance.recording import FORCE_TOPIC
-
-FORCE_FRAME_ID = "force_plate"
 
 
 def plate_layouts(topics: list[str], names: list[str], origins: list[float], yaws: list[float]) -> list[PlateLayout]:
@@ -89,7 +88,7 @@ class PlateCombinerNode(Node):
         origin = list(declare(self, "origin_m", [0.0, 0.0, 0.0], "lab point the combined moment is about: the contract frame's origin (m)"))
         max_skew = declare(self, "max_skew_s", 0.0006, "largest stamp skew between plates accepted when locking (s)")
         jitter = declare(self, "jitter_s", 0.0002, "per-sample stamp tolerance after the skew is locked (s)")
-        wait = declare(self, "missing_after_s", 0.05, "drop an instant a plate lacks once the others run this far ahead (s)")
+        wait = declare(self, "missing_after_s", 0.5, "drop an instant a plate lacks once the others run this far ahead (s)")
         self.output_topic = declare(self, "output_topic", FORCE_TOPIC, "combined wrench topic")
         self.end_timeout_s = declare(self, "end_timeout_s", 3.0, "after end-of-stream, wait this long (s) for missing data")
         if len(origin) != 3:
@@ -121,9 +120,16 @@ class PlateCombinerNode(Node):
         self._check_end()
 
     def process(self, everything: bool = False) -> None:
-        """Push released samples of every plate into the stage and publish what it completes."""
+        """Push released samples of every plate into the stage and publish what it completes.
+
+        A plate whose newest stamp is a reorder window behind the newest of all
+        has stopped (or lags): its buffered tail is released at once, so the
+        stage pairs it before it gives up on that plate's later instants.
+        """
+        newest = max((t.newest_ns or 0) for t in self.trackers)
         for k, buf in enumerate(self.buffers):
-            items = buf.release(everything)
+            own = self.trackers[k].newest_ns
+            items = buf.release(everything or (own is not None and newest - own > buf.window_ns))
             if items:
                 self._publish(*self.stage.push(k, [i[0] for i in items], [i[1] for i in items]))
         if everything:

@@ -1,0 +1,141 @@
+"""Two force plates live: the replay node plays a two-plate MCAP (built from a bundled recording,
+test/two_plates.py), the plate_combiner node (its own process, config/plates.yaml) sums them,
+over real DDS; the combined wrench gives the summed plate's stances and coefficients within
+1e-6 relative, and a plate that stops is reported on /diagnostics, not summed as zero."""
+
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+rclpy = pytest.importorskip("rclpy")
+from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
+from geometry_msgs.msg import WrenchStamped  # noqa: E402
+
+from hop_impedance.biomech.analysis import analyze_recording  # noqa: E402
+from hop_impedance.child_env import child_env  # noqa: E402
+from hop_impedance.impedance.recording_fits import fit_recording  # noqa: E402
+from hop_impedance.io.mcap_io import McapWriter  # noqa: E402
+from hop_impedance.io.recording_io import WRENCH_TYPE, load_recording  # noqa: E402
+from hop_impedance.nodes.common import stamp_ns  # noqa: E402
+from hop_impedance.nodes.qos import input_qos  # noqa: E402
+from hop_impedance.nodes.runner import child_command  # noqa: E402
+from hop_impedance.recording import FORCE_TOPIC, ForcePlateSeries, Recording  # noqa: E402
+from test.two_plates import LEFT_TOPIC, RIGHT_TOPIC, split_two_plates  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+RECORDING = ROOT / "recordings" / "sim_2p20hz_hard.mcap"
+PLATES_YAML = ROOT / "config" / "plates.yaml"
+
+
+def _write_two_plates(path: Path, parts: dict, right_until: int | None = None, n: int | None = None) -> None:
+    events = []
+    for topic, (stamps, w) in parts.items():
+        stop = right_until if (topic == RIGHT_TOPIC and right_until is not None) else n
+        for i in range(len(stamps) if stop is None else stop):
+            events.append((int(stamps[i]), topic, w[i]))
+    events.sort(key=lambda e: (e[0], e[1]))
+    with McapWriter(path) as writer:
+        for t, topic, w in events:
+            stamp = {"sec": t // 1_000_000_000, "nanosec": t % 1_000_000_000}
+            writer.write(topic, WRENCH_TYPE, {
+                "header": {"stamp": stamp, "frame_id": topic.rsplit("/", 1)[-1]},
+                "wrench": {"force": dict(zip("xyz", map(float, w[:3]))), "torque": dict(zip("xyz", map(float, w[3:])))},
+            }, t)
+
+
+def _wait_until(executor, condition, timeout_s: float) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not condition() and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.05)
+
+
+def _run(mcap: Path, want: int, log_dir: Path, timeout_s: float = 60.0, settle_s: float = 1.0):
+    """Start plate_combiner and replay as processes; collect /force_plate/wrench and /diagnostics."""
+    wrenches, diags = [], []
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    children = []
+    try:
+        node = rclpy.create_node("test_plate_listener", context=context)
+        node.create_subscription(WrenchStamped, FORCE_TOPIC, wrenches.append, input_qos(True))
+        node.create_subscription(DiagnosticArray, "/diagnostics", diags.append, 50)
+        executor = rclpy.executors.SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        for name, params, pfile in (
+            ("plate_combiner", {"diagnostics_period_s": 0.2}, str(PLATES_YAML)),
+            # rate 2 (not 0): without consumers a rate-0 replay waits for acknowledgements block by block
+            ("replay", {"recording": str(mcap), "rate": 2.0, "topics": [LEFT_TOPIC, RIGHT_TOPIC]}, None),
+        ):
+            log = open(log_dir / f"{name}.log", "w")  # noqa: SIM115
+            children.append(subprocess.Popen(child_command(name, params, pfile), env=child_env(), stdout=log, stderr=subprocess.STDOUT))
+            log.close()
+            if name == "plate_combiner":  # the replay waits for the combiner; the combiner must wait for us
+                _wait_until(executor, lambda: node.count_publishers(FORCE_TOPIC) > 0 and diags, 20.0)
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline and (len(wrenches) < want or children[1].poll() is None):
+            executor.spin_once(timeout_sec=0.05)
+        assert children[1].wait(timeout=10) == 0, (log_dir / "replay.log").read_text()
+        end = time.monotonic() + settle_s  # the combiner's end-of-stream flush and final diagnostics
+        while time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.05)
+    finally:
+        for p in children:
+            if p.poll() is None:
+                p.send_signal(2)
+        for p in children:
+            try:
+                p.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                p.kill()
+        rclpy.shutdown(context=context)
+    combiner = [s for d in diags for s in d.status if s.name == "/plate_combiner"]
+    return wrenches, combiner
+
+
+def _values(status) -> dict:
+    return {kv.key: kv.value for kv in status[-1].values} if status else {}
+
+
+def test_replayed_two_plates_combine_to_the_summed_plate(tmp_path):
+    rec = load_recording(RECORDING)
+    mcap = tmp_path / "two_plates.mcap"
+    _write_two_plates(mcap, split_two_plates(rec.force))
+    wrenches, status = _run(mcap, len(rec.force), tmp_path)
+    stamps = np.array([stamp_ns(w.header.stamp) for w in wrenches], np.int64)
+    assert len(wrenches) == len(rec.force), (_values(status), np.setdiff1d(rec.force.stamp_ns, stamps))
+    np.testing.assert_array_equal(stamps, rec.force.stamp_ns)
+    assert {w.header.frame_id for w in wrenches} == {"force_plate"}
+    force = np.array([[w.wrench.force.x, w.wrench.force.y, w.wrench.force.z] for w in wrenches])
+    moment = np.array([[w.wrench.torque.x, w.wrench.torque.y, w.wrench.torque.z] for w in wrenches])
+    a1 = analyze_recording(rec)
+    a2 = analyze_recording(Recording(ForcePlateSeries(stamps, force, moment), rec.markers, rec.subject, "live two plates"))
+    assert [t for s in a2.stances for t in (s.touchdown_s, s.takeoff_s)] == pytest.approx(
+        [t for s in a1.stances for t in (s.touchdown_s, s.takeoff_s)], rel=1e-6)
+    worst, n = 0.0, 0
+    for f1, f2 in zip(fit_recording(a1), fit_recording(a2)):
+        for joint, fit in f1.items():
+            assert f2[joint].rejection_reason == fit.rejection_reason
+            for term, v in fit.coefficients.items():
+                w2 = f2[joint].coefficients[term]
+                worst = max(worst, 0.0 if v == w2 else abs(w2 - v) / abs(v))
+                n += 1
+    print(f"over DDS: {len(wrenches)} combined samples, {n} coefficients, max relative difference {worst:.2e}")
+    assert n >= 60 and worst <= 1e-6
+    last = {kv.key: kv.value for kv in status[-1].values}
+    assert status[-1].level == bytes([0]), status[-1].message
+    assert last["left_missing"] == last["right_missing"] == "0" and last["right_skew_ms"] == "0.5"
+
+
+def test_a_plate_that_stops_is_reported_on_diagnostics(tmp_path):
+    rec = load_recording(RECORDING)
+    mcap = tmp_path / "right_stops.mcap"
+    _write_two_plates(mcap, split_two_plates(rec.force), right_until=700, n=1500)
+    wrenches, status = _run(mcap, 700, tmp_path, timeout_s=30.0, settle_s=4.5)  # end_timeout_s 3 s: the right plate never reaches the end
+    assert len(wrenches) == 700, _values(status)  # nothing after the right plate stopped: no half-weight wrench
+    final = status[-1]
+    assert final.level == bytes([2]) and "right" in final.message, final.message
+    values = {kv.key: kv.value for kv in final.values}
+    assert values["right_missing"] == "800" and values["published"] == "700"
