@@ -1,30 +1,30 @@
-"""Where the simulated hopper's energy goes, hop by hop (issue 4: why the push-off is as large as it is).
+"""Where the simulated hopper's energy goes, hop by hop (issues 4 and 17: why the push-off is as large as it is).
 
 For each hop of a noise-free hard-surface trial with the default law (seed
 Table 2 k0, k1; b0 = 0.5 N m s/rad; push-off), mechanical energy E = kinetic +
-gravitational of the four segments (J):
+gravitational of the four segments (J); the terms are those of
+:mod:`hop_impedance.simulation.energy_budget` (also written per hop into every truth file):
 
 - ``push-off``   work of the active push-off moment on the body, int -M_push omega dt;
-- ``damping``    energy the Eq. 3 law's damping (b0) dissipates, int b0 omega^2 dt;
-- ``springs``    elastic energy left in the joint springs at take-off,
-  U = k0 d^2/2 + k1 d^3/6 with d = rho(take-off) - rho0, summed over joints;
-  the law is referenced to the touchdown angle, so this energy does not come
-  back to the next stance;
-- ``ground``     work of the surface law on the foot, int Fz dz_toe/dt dt
-  (the hard law dissipates through its damping; its spring is unloaded at take-off);
-- ``flight``     E(next touchdown) - E(take-off): the prescribed flight
-  (hopping_trial.py docstring) keeps the COM ballistic but brings the segments
-  to the next touchdown posture, so the kinetic energy of segment motion
-  relative to the COM at take-off is discarded.
+- ``damping``    energy the Eq. 3 law dissipates (its work minus the springs left);
+- ``springs``    elastic energy left in the joint springs at take-off about the touchdown
+  reference; the prescribed flight does not return it;
+- ``ground``     work of the surface on the foot (the hard law dissipates through its damping);
+- ``trunk``      work of the trunk-balance moment at the hip (0 without one);
+- ``flight``     E(next touchdown) - E(take-off) (+ springs returned, energy-keeping flight): the
+  prescribed flight (``HoppingConfig.flight``, hopping_trial.py docstring) keeps the COM ballistic
+  but brings the segments to rest, so the kinetic energy of segment motion relative to the COM at
+  take-off is discarded; the energy-keeping flight keeps it (0 to rounding).
 
-Check: E(take-off) - E(touchdown) = push-off - damping - springs + ground (the
-horizontal no-slip constraint does no work); the residual is printed.
+Check: E(take-off) - E(touchdown) = sum of the works; the largest residual is printed.
 
 Push-off timing is printed as fractions of the actual stance: onset, peak and
 end of the sin^2 pulse, and the instant of maximal ankle flexion.
 
-Usage: .venv/bin/python bench/simulator_energy_budget.py [--hops 5] [--freqs 1.53,1.87,2.2] [--write]
-(``--write`` also writes docs/simulator_energy.md.)
+Usage: .venv/bin/python bench/simulator_energy_budget.py [--hops 5] [--freqs 1.53,1.87,2.2]
+       [--flights prescribed,energy_keeping] [--trunk K] [--write]
+(``--write`` also writes docs/simulator_energy.md; ``--trunk K`` adds a trunk-balance moment of
+stiffness K N m/rad.)
 """
 
 from __future__ import annotations
@@ -34,82 +34,70 @@ from pathlib import Path
 
 import numpy as np
 
-from hop_impedance.simulation.dynamics import mechanical_energy_j
-from hop_impedance.simulation.hopping_trial import push_off_part, simulate_hopping, simulate_resample
-from hop_impedance.simulation.impedance_laws import Eq3Law
+import dataclasses
+
+from hop_impedance.simulation.energy_budget import trial_energy_budget
+from hop_impedance.simulation.hopping_trial import push_off_part, simulate_hopping
+from hop_impedance.simulation.impedance_laws import TrunkBalance
 from hop_impedance.simulation.scenarios import hopping_config
 
-DT_S = 1e-4
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _eq3_part(law) -> Eq3Law:
-    return law if isinstance(law, Eq3Law) else law.part(Eq3Law)
+def timing(rec) -> dict:
+    """Push-off onset / peak / end and the instant of maximal ankle flexion, as fractions of the stance."""
+    st, push = rec.stance, push_off_part(rec.law)
+    duration = st.duration_s
+    out = {"ankle_max_flexion": float(st.t_s[np.argmax(st.rho_rad[:, 0])] / duration)}
+    out.update({"push_onset": push.onset_s / duration if push else np.nan,
+                "push_peak": (push.onset_s + push.duration_s / 2) / duration if push else np.nan,
+                "push_end": (push.onset_s + push.duration_s) / duration if push else np.nan})
+    return out
 
 
-def _energy(chain, g, gd) -> float:
-    kinetic, potential = mechanical_energy_j(chain, g, gd)
-    return kinetic + potential
-
-
-def stance_budget(chain, rec) -> dict:
-    """Energy terms (J) of one stance record (see module docstring)."""
-    t = np.arange(0.0, rec.stance.duration_s, DT_S)
-    t = np.append(t, rec.stance.duration_s)
-    st = simulate_resample(chain, rec, t)
-    eq3, push = _eq3_part(rec.law), push_off_part(rec.law)
-    if eq3.k2.any() or eq3.k3.any() or eq3.b1.any() or eq3.b2.any() or eq3.b3.any() or eq3.activation is not None:
-        raise ValueError("the budget is written for the default law (k0, k1, b0, push-off)")
-    omega = st.omega_rad_s
-    push_power = -(push.profile(t)[:, None] * push.amplitude_nm * omega).sum(axis=1) if push else np.zeros_like(t)
-    d = st.rho_rad[-1] - st.rho_rad[0]
-    toe_vz = st.gd[:, 1]
-    duration = rec.stance.duration_s
-    return {
-        "push_onset": push.onset_s / duration if push else np.nan,
-        "push_peak": (push.onset_s + push.duration_s / 2) / duration if push else np.nan,
-        "push_end": (push.onset_s + push.duration_s) / duration if push else np.nan,
-        "ankle_max_flexion": float(t[np.argmax(st.rho_rad[:, 0])] / duration),
-        "push_off": float(np.trapezoid(push_power, t)),
-        "damping": float(np.trapezoid((eq3.b0 * omega**2).sum(axis=1), t)),
-        "springs": float(np.sum(eq3.k0 * d**2 / 2 + eq3.k1 * d**3 / 6)),
-        "ground": float(np.trapezoid(st.grf_n[:, 1] * toe_vz, t)),
-        "e_touchdown": _energy(chain, st.g[0], st.gd[0]),
-        "e_takeoff": _energy(chain, st.g[-1], st.gd[-1]),
-    }
-
-
-def trial_budget(freq_hz: float, hops: int, seed: int = 1) -> list[dict]:
-    """Per-hop budgets of a hard-surface trial; the flight term needs the next touchdown, so the last hop has none."""
+def trial_budget(freq_hz: float, hops: int, flight: str = "prescribed", trunk: float = 0.0, seed: int = 1):
+    """Per-hop budgets (the last hop has no flight term, so it is left out) and the trial's stop reason."""
     chain, config = hopping_config(freq_hz, "hard", hops)
+    config = dataclasses.replace(config, flight=flight, trunk_balance=TrunkBalance(trunk) if trunk else None)
     trial = simulate_hopping(chain, config, seed=seed)
-    rows = [stance_budget(chain, rec) for rec in trial.stances]
-    for row, nxt in zip(rows[:-1], rows[1:]):
-        row["flight"] = nxt["e_touchdown"] - row["e_takeoff"]
-    return rows[:-1]
+    rows = [{**b, **timing(rec)} for b, rec in zip(trial_energy_budget(trial), trial.stances)]
+    return [r for r in rows if "flight_j" in r], trial.stop_reason
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hops", type=int, default=5)
     parser.add_argument("--freqs", default="1.53,1.87,2.2")
+    parser.add_argument("--flights", default="prescribed,energy_keeping")
+    parser.add_argument("--trunk", type=float, default=0.0, help="trunk-balance stiffness (N m/rad), 0 = none")
     parser.add_argument("--write", action="store_true", help="also write docs/simulator_energy.md")
     args = parser.parse_args()
-    lines = ["| frequency (Hz) | push-off work | damping | springs left at take-off | ground | flight | "
-             "stance balance residual |", "|---|---|---|---|---|---|---|"]
-    timing = ["| frequency (Hz) | push-off onset | push-off peak | push-off end | ankle max flexion |",
-              "|---|---|---|---|---|"]
-    for freq in (float(f) for f in args.freqs.split(",")):
-        rows = trial_budget(freq, args.hops)[1:]  # the first hop starts from the calibrated state
-        mean = {k: np.mean([r[k] for r in rows]) for k in rows[0]}
-        residual = max(abs(r["e_takeoff"] - r["e_touchdown"] - (r["push_off"] - r["damping"] - r["springs"] + r["ground"]))
-                       for r in rows)
-        lines.append(f"| {freq:.2f} | {mean['push_off']:.1f} J | -{mean['damping']:.1f} J | -{mean['springs']:.1f} J | "
-                     f"{mean['ground']:.1f} J | {mean['flight']:.1f} J | {residual:.2f} J |")
-        timing.append(f"| {freq:.2f} | {mean['push_onset']:.0%} | {mean['push_peak']:.0%} | {mean['push_end']:.0%} | "
-                      f"{mean['ankle_max_flexion']:.0%} |")
-    caption = f"(mean of hops 2-{args.hops - 1}; noise-free, hard surface, default law; fractions of the actual stance)"
-    text = "\n".join(lines) + "\n\n" + "\n".join(timing) + "\n\n" + caption
+    lines = ["| flight | frequency (Hz) | push-off work | damping | springs left at take-off | ground | trunk | flight | "
+             "stance balance residual |", "|---|---|---|---|---|---|---|---|---|"]
+    timing_lines = ["| flight | frequency (Hz) | push-off onset | push-off peak | push-off end | ankle max flexion |",
+                    "|---|---|---|---|---|---|"]
+    for flight in args.flights.split(","):
+        for freq in (float(f) for f in args.freqs.split(",")):
+            try:
+                rows, stop = trial_budget(freq, args.hops, flight, args.trunk)
+            except ValueError as exc:
+                lines.append(f"| {flight} | {freq:.2f} | no trial: {exc} |" + " |" * 6)
+                continue
+            rows = rows[1:]  # the first hop starts from the calibrated state
+            if not rows:
+                lines.append(f"| {flight} | {freq:.2f} | stopped: {stop} |" + " |" * 6)
+                continue
+            mean = {k: np.mean([r[k] for r in rows]) for k in rows[0]}
+            residual = max(abs(r["residual_j"]) for r in rows)
+            stopped = f" (stopped: {stop})" if stop else ""
+            lines.append(f"| {flight} | {freq:.2f}{stopped} | {mean['push_off_j']:.1f} J | -{mean['damping_j']:.1f} J | "
+                         f"-{mean['springs_left_j']:.1f} J | {mean['ground_j']:.1f} J | {mean['trunk_balance_j']:.1f} J | "
+                         f"{mean['flight_j']:.1f} J | {residual:.2f} J |")
+            timing_lines.append(f"| {flight} | {freq:.2f} | {mean['push_onset']:.0%} | {mean['push_peak']:.0%} | "
+                                f"{mean['push_end']:.0%} | {mean['ankle_max_flexion']:.0%} |")
+    caption = (f"(mean of hops 2 to the second-last of {args.hops}; noise-free, hard surface, default law"
+               f"{f', trunk balance {args.trunk:g} N m/rad' if args.trunk else ''}; fractions of the actual stance)")
+    text = "\n".join(lines) + "\n\n" + "\n".join(timing_lines) + "\n\n" + caption
     print(text)
     if args.write:
         doc = ROOT / "docs" / "simulator_energy.md"
@@ -117,6 +105,7 @@ def main() -> None:
                        "`.venv/bin/python bench/simulator_energy_budget.py --write`; the terms are defined in "
                        "that script's docstring.\n\n" + text + "\n")
         print(f"wrote {doc}")
+
 
 if __name__ == "__main__":
     main()

@@ -23,6 +23,11 @@ Layout (format ``hop_impedance.simulation.truth/1``)
   Eq. 3 hip law plus that term), and GRF ``[Fx, Fz]`` (N) at every force-plate
   sample inside the stance (``t_s`` in recording time).
 
+- ``stances[i].energy_j``: the hop's energy budget (J): push-off work, Eq. 3 work, springs left at
+  take-off, damping, trunk-balance work, ground work, energy at touchdown / take-off, bookkeeping
+  residual, and ``flight_j`` (what the following flight discards; absent on the last stance), see
+  :mod:`hop_impedance.simulation.energy_budget`.
+
 Numbers in ``samples`` are rounded to 7 significant digits to keep files small.
 """
 
@@ -37,7 +42,8 @@ from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.recording import Subject
 from hop_impedance.simulation.hopping_trial import HoppingTrial, StanceRecord, leg_stiffness_n_m, simulate_resample
-from hop_impedance.simulation.impedance_laws import COEFFICIENT_NAMES, CompositeLaw, Eq3Law, PushOff
+from hop_impedance.simulation.energy_budget import law_part, part_moments_nm, trial_energy_budget
+from hop_impedance.simulation.impedance_laws import COEFFICIENT_NAMES, Eq3Law, PushOff
 from hop_impedance.simulation.sensors import SensorConfig, sample_times_s, stamps_ns
 
 TRUTH_FORMAT = "hop_impedance.simulation.truth/1"
@@ -53,22 +59,6 @@ def _round(a: np.ndarray) -> list:
     return np.vectorize(lambda v: float(f"{v:.7g}"))(np.asarray(a, float)).tolist() if np.size(a) else []
 
 
-def _law_part(law, kind):
-    if isinstance(law, kind):
-        return law
-    if isinstance(law, CompositeLaw):
-        return law.part(kind)
-    return None
-
-
-def _part_moments(part, st) -> np.ndarray:
-    """Moments (N m) of one law part along a stance; zeros if the part is absent."""
-    if part is None:
-        return np.zeros_like(st.moments_nm)
-    states = st.law_states[:, : part.n_states] if isinstance(part, Eq3Law) else st.law_states[:, :0]
-    return part.moments_nm(st.t_s, st.rho_rad, st.omega_rad_s, states, st.ref)
-
-
 def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, weight_n: float) -> dict:
     """Truth entry of one stance (see module docstring)."""
     rate = sensors.force_rate_hz
@@ -76,8 +66,8 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
     t_in = t_all[(t_all >= rec.t_touchdown_s) & (t_all <= rec.t_takeoff_s)]
     st = simulate_resample(trial.chain, rec, t_in - rec.t_touchdown_s)
     k_leg, peak, compression = leg_stiffness_n_m(trial.chain, rec.stance)
-    eq3 = _law_part(rec.law, Eq3Law)
-    push = _law_part(rec.law, PushOff)
+    eq3 = law_part(rec.law, Eq3Law)
+    push = law_part(rec.law, PushOff)
     impedance = {}
     for j, name in enumerate(JOINT_NAMES):
         entry = {c: (float(getattr(eq3, c)[j]) if eq3 is not None else 0.0) for c in COEFFICIENT_NAMES}
@@ -110,8 +100,8 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
             "rho_rad": _round(st.rho_rad),
             "omega_rad_s": _round(st.omega_rad_s),
             "moments_nm": _round(st.moments_nm),
-            "eq3_moments_nm": _round(_part_moments(eq3, st)),
-            "push_off_moments_nm": _round(_part_moments(push, st)),
+            "eq3_moments_nm": _round(part_moments_nm(eq3, st)),
+            "push_off_moments_nm": _round(part_moments_nm(push, st)),
             "trunk_balance_moments_nm": _round(st.trunk_moments_nm if st.trunk_moments_nm is not None
                                                else np.zeros_like(st.moments_nm)),
             "grf_n": _round(st.grf_n),
@@ -165,7 +155,8 @@ def trial_truth(
         "recording": {"start_ns": sensors.start_ns, "duration_s": trial.t_end_s},
         "stop_reason": trial.stop_reason,
         "notes": list(trial.notes),
-        "stances": [stance_truth(trial, rec, sensors, subject.body_weight_n) for rec in trial.stances],
+        "stances": [{**stance_truth(trial, rec, sensors, subject.body_weight_n), "energy_j": budget}
+                    for rec, budget in zip(trial.stances, trial_energy_budget(trial))],
     }
 
 

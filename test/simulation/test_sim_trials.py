@@ -179,6 +179,26 @@ def test_command_line_writes_small_recording_and_truth(tmp_path):
     assert main(["simulate", "--out", str(tmp_path / "x.mcap"), "--hops", "0"]) == 2
 
 
+def test_truth_energy_budget_closes_hop_by_hop_and_the_push_off_replaces_the_losses(clean_recording):
+    """Per-hop energy budget in the truth file (issue 17): in each stance the works of push-off, Eq. 3 law,
+    trunk balance and ground add up to E(take-off) - E(touchdown); over a whole hop (stance + following
+    flight) they add up to the change of touchdown energy, so the push-off is exactly what damping, the
+    ground, springs left at take-off and the flight take away (up to the hop-to-hop change)."""
+    _, truth = clean_recording
+    stances = truth["stances"]
+    for s in stances:
+        e = s["energy_j"]
+        assert abs(e["residual_j"]) < 0.1  # J, trapezoid at 0.2 ms (measured < 0.05)
+        assert e["push_off_j"] > 1.0 and e["damping_j"] > 0.0 and e["ground_j"] < 0.0
+        assert e["eq3_work_j"] == pytest.approx(-(e["damping_j"] + e["springs_left_j"]))
+    for s, nxt in zip(stances[:-1], stances[1:]):
+        e = s["energy_j"]
+        works = e["push_off_j"] + e["eq3_work_j"] + e["trunk_balance_j"] + e["ground_j"] + e["flight_j"]
+        assert nxt["energy_j"]["e_touchdown_j"] - e["e_touchdown_j"] == pytest.approx(works, abs=0.1)
+        assert e["flight_j"] < -0.5  # the default (prescribed) flight discards segment energy
+    assert "flight_j" not in stances[-1]["energy_j"]
+
+
 @pytest.fixture(scope="module")
 def clean_recording_250hz():
     from dataclasses import replace
