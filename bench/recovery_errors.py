@@ -15,6 +15,11 @@ uncertainty matches the scatter) and each trial's median.
     .venv/bin/python bench/recovery_errors.py --frequencies 2.2 --seeds 11 12 13 14 15 16 17 18
 
 CPU time at the end (about 25 s per frequency for four trials).
+
+``--scheduler local`` runs one Dask task per (frequency, seed) on the embedded
+local cluster of ``hop-impedance batch``, ``--scheduler tcp://HOST:8786`` on an
+existing cluster (:func:`hop_impedance.batch.runner.cluster_map`); the trials
+are pooled in seed order as in the serial run.
 """
 
 from __future__ import annotations
@@ -50,15 +55,37 @@ def main() -> None:
     parser.add_argument("--noisy-cutoff", type=float, default=12.0, help="cut-off of the noisy analysis (Hz)")
     parser.add_argument("--skip-first", type=int, default=0, help="simulated stances left out at the start of each trial")
     parser.add_argument("--edge", type=float, default=0.0, help="time left out of the fit at each stance edge (s)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="one Dask task per frequency and seed: 'local' (embedded cluster) or tcp://HOST:8786")
     args = parser.parse_args()
-    cpu0 = time.process_time()
+    cpu0, wall0 = time.process_time(), time.perf_counter()
+    cutoffs = {"clean": args.clean_cutoff, "noisy": args.noisy_cutoff}
+    if args.scheduler:
+        from hop_impedance.batch.runner import cluster_map
+
+        calls = [(f, [s], cutoffs, args.hops, args.edge, args.skip_first) for f in args.frequencies for s in args.seeds]
+        parts = iter(cluster_map(_recover_in_temp, calls, mode=args.scheduler))
+        for freq in args.frequencies:
+            results = next(parts)
+            for _ in args.seeds[1:]:
+                for label, part in next(parts).items():
+                    results[label].extend(part)
+            print_table(freq, results)
+        print(f"wall {time.perf_counter() - wall0:.1f} s on the cluster ({args.scheduler})")
+        return
     with tempfile.TemporaryDirectory() as folder:
         for freq in args.frequencies:
-            cutoffs = {"clean": args.clean_cutoff, "noisy": args.noisy_cutoff}
             results = recover_pooled(freq, args.seeds, Path(folder), cutoff_hz=cutoffs, n_hops=args.hops,
                                      edge_s=args.edge, skip_first=args.skip_first)
             print_table(freq, results)
     print(f"CPU {time.process_time() - cpu0:.1f} s")
+
+
+def _recover_in_temp(freq, seeds, cutoffs, hops, edge, skip_first) -> dict[str, RecoveryResult]:
+    """recover_pooled in a temporary folder of the worker that runs it."""
+    with tempfile.TemporaryDirectory() as folder:
+        return recover_pooled(freq, seeds, Path(folder), cutoff_hz=cutoffs, n_hops=hops, edge_s=edge,
+                              skip_first=skip_first)
 
 
 if __name__ == "__main__":

@@ -315,6 +315,28 @@ def _with_client(mode: str, workers: int | None, client, job) -> int:
         return n
 
 
+def cluster_map(func, args_list: list[tuple], mode: str = "local", workers: int | None = None) -> list:
+    """``[func(*args) for args in args_list]`` with one task per call, results in input order.
+
+    The same execution path as the batch: ``mode`` ``"serial"`` (this process),
+    ``"local"`` (embedded LocalCluster, :func:`local_cluster`) or a scheduler
+    address. For sweeps (``bench/recovery_errors.py --scheduler``); ``func``
+    must be importable or picklable by value on the workers.
+    """
+    if mode == "serial":
+        return [func(*args) for args in args_list]
+    results: list = [None] * len(args_list)
+
+    def job(client) -> None:
+        futures = [client.submit(func, *args, pure=False) for args in args_list]
+        for i, fut in enumerate(futures):
+            results[i] = fut.result()
+            fut.release()
+
+    _with_client(mode, workers, None, job)
+    return results
+
+
 def _condition(item: BatchItem, outcome: Outcome, group_by: str) -> str:
     labels = dict(item.labels)
     if group_by == "condition":
@@ -377,4 +399,4 @@ def summary_text(summary: BatchSummary, out: str) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["BatchSummary", "Progress", "local_cluster", "run_batch", "summary_text"]
+__all__ = ["BatchSummary", "Progress", "cluster_map", "local_cluster", "run_batch", "summary_text"]
