@@ -68,6 +68,10 @@ MASS_RANGE_KG = (10.0, 300.0)
 HEIGHT_RANGE_M = (0.5, 2.6)
 
 
+#: Every rejection reason from a failed input check starts with this.
+INPUT_CHECK_PREFIX = "input check "
+
+
 @dataclass(frozen=True)
 class CheckFailure:
     """A failed input check: the rule's name and a one-line message."""
@@ -78,7 +82,7 @@ class CheckFailure:
     @property
     def reason(self) -> str:
         """The rejection reason of every stance affected (names the rule)."""
-        return f"input check {self.rule}: {self.message}"
+        return f"{INPUT_CHECK_PREFIX}{self.rule}: {self.message}"
 
     def __str__(self) -> str:
         return self.reason

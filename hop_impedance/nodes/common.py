@@ -192,8 +192,9 @@ class InputTracker:
 class ReorderBuffer:
     """Holds stamped items for ``window_ns`` of stamp time so out-of-order arrivals are sorted.
 
-    ``add`` returns False (and counts ``dropped``) for an item older than the
-    last released one: it arrived too late to be used in order.
+    ``add`` returns False (and counts ``dropped``) for an item older than (or
+    as old as) the last released one: it arrived too late to be used in order,
+    or is a duplicate of a released one.
     """
 
     def __init__(self, window_ns: int) -> None:
@@ -201,6 +202,7 @@ class ReorderBuffer:
         self.items: list[tuple[int, object]] = []
         self.released_ns: int | None = None
         self.dropped = 0
+        self.duplicates = 0
 
     def add(self, ns: int, item) -> bool:
         if self.released_ns is not None and ns <= self.released_ns:
@@ -210,7 +212,13 @@ class ReorderBuffer:
         return True
 
     def release(self, everything: bool = False) -> list[tuple[int, object]]:
-        """Items older than newest - window (all with ``everything``), in stamp order."""
+        """Items older than newest - window (all with ``everything``), in stamp order, each stamp once.
+
+        A repeated stamp (a duplicated message) keeps its first arrival and counts
+        in ``duplicates``, as the offline loader drops it
+        (:func:`hop_impedance.input_checks.order_by_stamp`); the stages downstream
+        need strictly increasing stamps.
+        """
         if not self.items:
             return []
         self.items.sort(key=lambda x: x[0])
@@ -221,7 +229,79 @@ class ReorderBuffer:
         out, self.items = self.items[:n], self.items[n:]
         if out:
             self.released_ns = out[-1][0]
+            unique = [out[0]] + [b for a, b in zip(out, out[1:]) if b[0] != a[0]]
+            self.duplicates += len(out) - len(unique)
+            out = unique
         return out
+
+
+class InputGuard:
+    """The shared input checks (:class:`hop_impedance.input_checks.InputChecks`) inside a node.
+
+    Declares the parameters ``subject_wait_s`` (2.0: stamp time after the first
+    force sample to wait for ``/subject``), ``body_mass_kg`` and
+    ``body_height_m`` (0 = none: without ``/subject`` the node then fails the
+    ``subject_missing`` rule), and turns a failed rule into the node's state:
+    :meth:`reason` for every stance, :meth:`level` for ``/diagnostics`` (ERROR
+    naming the rule), :meth:`values` (``input_check``, ``input_note``), and one
+    error line in the node's log. No check is re-implemented here.
+    """
+
+    def __init__(self, node: Node, cutoff_hz: float) -> None:
+        from hop_impedance.input_checks import InputChecks
+        from hop_impedance.recording import Subject
+
+        self.node = node
+        wait = declare(node, "subject_wait_s", 2.0, f"wait this long (stamp time, s) for {SUBJECT_TOPIC} before using the parameters")
+        mass = declare(node, "body_mass_kg", 0.0, f"body mass (kg) if no {SUBJECT_TOPIC} arrives in time; 0 = stop with an error")
+        height = declare(node, "body_height_m", 0.0, f"body height (m) if no {SUBJECT_TOPIC} arrives in time")
+        fallback = Subject("parameters", float(mass), float(height)) if mass or height else None
+        self.checks = InputChecks(cutoff_hz, subject_wait_s=float(wait), fallback=fallback)
+        self._notes_logged = 0
+        self._failure_logged = False
+
+    @property
+    def failure(self):
+        return self.checks.failure
+
+    def subject(self, subject) -> None:
+        self.checks.set_subject(subject)
+        self._log()
+
+    def force(self, items: list[tuple[int, tuple]], fz_index: int) -> None:
+        """Released force items ``(stamp ns, values)``; ``values[fz_index]`` is force.z (N)."""
+        if items:
+            self.checks.force(np.fromiter((i[0] for i in items), np.int64, len(items)),
+                              np.fromiter((i[1][fz_index] for i in items), float, len(items)))
+            self._log()
+
+    def marker_frame(self, ns: int, names: list[str], positions) -> None:
+        """One ``MarkerArray``: names checked, positions (m) in contract order checked for units."""
+        columns = self.checks.marker_names(names)
+        if columns is not None and len(positions) == len(names):
+            xyz = np.array([(p.x, p.y, p.z) for p in positions], float)[columns]
+            self.checks.markers(ns, xyz)
+        self._log()
+
+    def reason(self, existing: str | None) -> str | None:
+        """A stance's rejection reason: the failed rule's, else ``existing``."""
+        return self.checks.failure.reason if self.checks.failure is not None else existing
+
+    def level(self) -> tuple[int, str] | None:
+        """``(2, reason)`` (ERROR) once a rule failed, else None."""
+        return (2, self.checks.failure.reason) if self.checks.failure is not None else None
+
+    def values(self) -> dict:
+        f = self.checks.failure
+        return {"input_check": f.reason if f is not None else "ok", "input_note": "; ".join(self.checks.notes)}
+
+    def _log(self) -> None:
+        for note in self.checks.notes[self._notes_logged:]:
+            self.node.get_logger().warning(note)
+        self._notes_logged = len(self.checks.notes)
+        if self.checks.failure is not None and not self._failure_logged:
+            self.node.get_logger().error(f"{self.checks.failure.reason}; every stance is rejected")
+            self._failure_logged = True
 
 
 def percentile_ms(values: list[float], q: float) -> float:

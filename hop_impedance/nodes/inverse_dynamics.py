@@ -49,7 +49,7 @@ from hop_impedance.biomech.kinematics import body_model_from_markers
 from hop_impedance.biomech.stages import StanceAnalysisStage
 from hop_impedance.nodes.common import (
     END_TOPIC, JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC, Diagnostics, InputTracker, ProgressReporter,
-    ReorderBuffer, declare, declare_stream_parameters, seconds_to_ns, set_stamp, stamp_ns, wrench_from_cdr,
+    InputGuard, ReorderBuffer, declare, declare_stream_parameters, seconds_to_ns, set_stamp, stamp_ns, wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
 from hop_impedance.nodes.stance_detector import declare_detector_options
@@ -74,6 +74,7 @@ class InverseDynamicsNode(Node):
         # the stance detector's parameters and defaults, so both nodes find the same stances (one detector)
         self.options = AnalysisOptions(marker_cutoff_hz=cutoff, force_cutoff_hz=cutoff, max_gap_s=max_gap,
                                        detector=declare_detector_options(self))
+        self.guard = InputGuard(self, cutoff)  # the input checks analyze runs (hop_impedance.input_checks)
         self.post_pad_s = post_pad if low_latency else None
         self.subject: Subject | None = None
         self.stage: StanceAnalysisStage | None = None
@@ -109,6 +110,7 @@ class InverseDynamicsNode(Node):
 
     def _on_subject(self, msg: SubjectInfo) -> None:
         self.subject = Subject(msg.subject_id, float(msg.body_mass), float(msg.body_height), self.sex)
+        self.guard.subject(self.subject)
 
     def _on_wrench(self, cdr: bytes) -> None:
         """Raw ``WrenchStamped`` (parsed by :func:`common.wrench_from_cdr`, ~30x cheaper than deserialising)."""
@@ -121,6 +123,7 @@ class InverseDynamicsNode(Node):
         ns = stamp_ns(msg.header.stamp)
         self.trackers[MARKER_TOPIC].note(ns)
         names = list(msg.names)
+        self.guard.marker_frame(ns, names, msg.positions)
         xz = np.full((len(MARKER_NAMES), 2), np.nan)
         for i, name in enumerate(MARKER_NAMES):
             if name in names:
@@ -143,9 +146,12 @@ class InverseDynamicsNode(Node):
     def _finish(self) -> None:
         """End of a replayed stream: analyse what remains (the last stance) and report finished."""
         self.process(everything=True)
-        if self.stage is None and self.subject is not None and self.calib:
+        if self.stage is None and (self.subject is not None or self.guard.failure is not None):
             self._start_stage(force_model=True)
-            self.process(everything=True)
+            if self.stage is not None:  # the data held while waiting for the model
+                for res in self.stage.push(self._force_arrays(self.pending_force), self._marker_arrays(self.pending_markers)):
+                    self._publish(res)
+                self.pending_force, self.pending_markers = [], []
         if self.stage is not None:
             for res in self.stage.flush():
                 self._publish(res)
@@ -171,6 +177,10 @@ class InverseDynamicsNode(Node):
         markers = self.marker_buf.release(everything)
         for ns, _ in forces:
             self.sorted_force.note(ns)
+        self.guard.force(forces, 1)
+        if self.subject is None and self.guard.checks.subject is not None:  # no /subject in time: the parameters
+            s = self.guard.checks.subject
+            self.subject = Subject(s.subject_id, s.body_mass_kg, s.body_height_m, self.sex)
         if self._arrivals_new:
             self.arrivals = np.concatenate([self.arrivals[-5000:], np.array(self._arrivals_new, np.int64)])
             self._arrivals_new = []
@@ -207,6 +217,11 @@ class InverseDynamicsNode(Node):
 
     def _start_stage(self, force_model: bool = False) -> None:
         """Scale the body model once the subject and ``calibration_s`` of marker frames are in."""
+        if self.guard.failure is not None or self._force_only(force_model):
+            # failed input check, or no markers at all: no model; every stance still gets a row with its reason
+            mass = self.subject.body_mass_kg if self.subject is not None else math.nan
+            self.stage = StanceAnalysisStage(None, mass, self.options, self.post_pad_s)
+            return
         if self.subject is None or not self.calib:
             return
         span_s = (self.calib[-1][0] - self.calib[0][0]) * 1e-9
@@ -224,6 +239,16 @@ class InverseDynamicsNode(Node):
         self.stage = StanceAnalysisStage(model, self.subject.body_mass_kg, self.options, self.post_pad_s)
         self.calib = []
         self.get_logger().info(f"body model scaled from {len(stamps)} marker frames ({span_s:.2f} s)")
+
+    def _force_only(self, at_end: bool) -> bool:
+        """No marker message at all with the subject known, at the end or after 2 x ``calibration_s`` of force."""
+        if self.subject is None or self.calib or self.trackers[MARKER_TOPIC].received or not self.pending_force:
+            return False
+        span_s = (self.pending_force[-1][0] - self.pending_force[0][0]) * 1e-9
+        if at_end or span_s >= 2 * self.calibration_s:
+            self.get_logger().warning(f"no {MARKER_TOPIC} messages: force-only, stances without joint data")
+            return True
+        return False
 
     def _bound_pending(self, max_s: float = 30.0) -> None:
         """Without a subject, keep at most ``max_s`` of data (older samples are counted as lost)."""
@@ -253,6 +278,8 @@ class InverseDynamicsNode(Node):
         return int(self.arrivals[idx, 1]) if idx < len(self.arrivals) else 0
 
     def _publish(self, res: StanceResult) -> None:
+        if self.guard.failure is not None:
+            res.rejection_reason, res.joints = self.guard.reason(res.rejection_reason), None
         msg = stance_message(res, self.t0_ns)
         msg.takeoff_received_ns = self._takeoff_arrival_ns(stamp_ns(msg.takeoff_stamp))
         msg.force_samples_lost_before = self.sorted_force.take_lost_before(stamp_ns(msg.touchdown_stamp))
@@ -283,9 +310,14 @@ class InverseDynamicsNode(Node):
         out["analysis_p50_ms"] = _pct(self.analysis_s, 50)
         out["analysis_p99_ms"] = _pct(self.analysis_s, 99)
         out["body_model"] = "ready" if self.stage is not None else "waiting for subject/markers"
+        out["force_duplicates_dropped"] = self.force_buf.duplicates
+        out["markers_duplicates_dropped"] = self.marker_buf.duplicates
+        out |= self.guard.values()
         return out
 
     def _diag_level(self) -> tuple[int, str]:
+        if self.guard.level() is not None:
+            return self.guard.level()
         lost = sum(t.lost for t in self.trackers.values()) + self.force_buf.dropped + self.marker_buf.dropped
         return (1, f"{lost} input messages lost or too late") if lost else (0, "ok")
 
