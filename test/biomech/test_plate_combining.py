@@ -131,27 +131,22 @@ def test_a_plate_that_stops_is_reported_and_nothing_is_summed_without_it():
     assert stage.missing == [0, 1000]
 
 
-def test_skew_locks_past_samples_that_have_no_partner():
-    """The right plate starts 2 samples late: the left plate's first two instants are counted, the rest pair."""
+@pytest.mark.parametrize("late, skew_ns, missing", [
+    # The right plate starts 2 samples late: the left's first two instants are counted, the rest pair at +0.5 ms.
+    (RIGHT_TOPIC, SKEW_NS, [0, 2]),
+    # The left starts 2 late: at 0.5 ms (half a period at 1 kHz) the right's second sample is as close to the
+    # left's first one as its own partner, so the lock takes -0.5 ms, as the module docstring warns.
+    (LEFT_TOPIC, SKEW_NS - 1_000_000, [2, 0]),
+])
+def test_skew_lock_when_one_plate_starts_late(late, skew_ns, missing):
     rec = load_recording(RECORDING)
     parts = split_two_plates(rec.force)
-    parts[RIGHT_TOPIC] = (parts[RIGHT_TOPIC][0][2:], parts[RIGHT_TOPIC][1][2:])
+    parts[late] = (parts[late][0][2:], parts[late][1][2:])
     stage = PlateCombinerStage(LAYOUTS)
     stamps, _, _ = _stream(stage, parts)
     np.testing.assert_array_equal(stamps, rec.force.stamp_ns[2:])
-    assert stage.skew_ns[1] == SKEW_NS
-    assert stage.missing == [0, 2]
-
-
-def test_half_period_skew_is_ambiguous_as_documented():
-    """0.5 ms at 1 kHz: a right plate starting early locks on the neighbouring sample (-0.5 ms), as the docstring warns."""
-    rec = load_recording(RECORDING)
-    parts = split_two_plates(rec.force)
-    parts[LEFT_TOPIC] = (parts[LEFT_TOPIC][0][2:], parts[LEFT_TOPIC][1][2:])
-    stage = PlateCombinerStage(LAYOUTS)
-    stamps, _, _ = _stream(stage, parts)
-    assert stage.skew_ns[1] == SKEW_NS - 1_000_000
-    assert stamps.size == len(rec.force) - 2
+    assert stage.skew_ns[1] == skew_ns
+    assert stage.missing == missing
 
 
 def test_bad_layouts_are_one_line_errors():

@@ -29,15 +29,21 @@ README_BUILD = ("colcon build --base-paths src/hop_impedance src/hop_impedance/m
 README_SOURCE = "source install/setup.bash"
 
 
-def console_scripts() -> list[str]:
-    """Executable names of setup.py's console_scripts (parsed, not imported)."""
+def entry_modules() -> dict[str, str]:
+    """setup.py's console_scripts (parsed, not imported): executable name -> module."""
     tree = ast.parse((ROOT / "setup.py").read_text())
     for node in ast.walk(tree):
         if isinstance(node, ast.Dict):
             for k, v in zip(node.keys, node.values):
                 if isinstance(k, ast.Constant) and k.value == "console_scripts":
-                    return [ast.literal_eval(e).split("=")[0].strip() for e in v.elts]
+                    pairs = [ast.literal_eval(e).split("=") for e in v.elts]
+                    return {name.strip(): target.strip().split(":")[0] for name, target in pairs}
     raise AssertionError("setup.py has no console_scripts")
+
+
+def console_scripts() -> list[str]:
+    """Executable names of setup.py's console_scripts."""
+    return list(entry_modules())
 
 
 def test_readme_shows_the_commands_this_test_runs():

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import yaml
 
-from test.ros.test_colcon_workspace import console_scripts
+from test.ros.test_colcon_workspace import console_scripts, entry_modules
 
 ROOT = Path(__file__).resolve().parents[2]
 LAUNCH = ROOT / "launch" / "pipeline.launch.py"
@@ -62,17 +62,6 @@ def declared_parameters(executables: list[str], modules: dict[str, str], tmp: Pa
     finally:
         rclpy.shutdown(context=context)
     return out
-
-
-def entry_modules() -> dict[str, str]:
-    tree = ast.parse((ROOT / "setup.py").read_text())
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Dict):
-            for k, v in zip(node.keys, node.values):
-                if isinstance(k, ast.Constant) and k.value == "console_scripts":
-                    pairs = [ast.literal_eval(e).split("=") for e in v.elts]
-                    return {name.strip(): target.strip().split(":")[0] for name, target in pairs}
-    return {}
 
 
 def test_every_launched_executable_is_an_entry_point_with_its_parameters(tmp_path):
