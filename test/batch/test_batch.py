@@ -1,6 +1,6 @@
 """hop-impedance batch on a real distributed.LocalCluster (2 worker processes, 127.0.0.1).
 
-The bundled recordings plus two broken ones (a truncated MCAP, random bytes)
+The bundled recordings plus two broken ones (an empty file, random bytes)
 go through the serial path and the cluster; every output file must be equal
 byte for byte, a worker killed mid-task must lose nothing, the broken files
 must land in failures.csv while the rest complete, and a re-run must skip
@@ -28,7 +28,7 @@ from hop_impedance.batch.inputs import collect_items  # noqa: E402
 from hop_impedance.batch.runner import local_cluster, run_batch  # noqa: E402
 
 REC_DIR = Path(__file__).resolve().parents[2] / "recordings"
-BROKEN = ("truncated", "noise")
+BROKEN = ("empty", "noise")
 
 
 def _tree(out: Path) -> dict[str, bytes]:
@@ -42,8 +42,7 @@ def inputs(tmp_path_factory) -> Path:
     d = tmp_path_factory.mktemp("batch_in")
     for p in sorted(REC_DIR.glob("*.mcap")):
         shutil.copy(p, d / p.name)
-    data = (REC_DIR / "sim_1p53hz_hard.mcap").read_bytes()
-    (d / "truncated.mcap").write_bytes(data[: len(data) // 3])
+    (d / "empty.mcap").write_bytes(b"")
     (d / "noise.mcap").write_bytes(np.random.default_rng(7).bytes(50_000))
     return d
 
@@ -205,3 +204,17 @@ def test_manifest_labels_and_tests_paired_by_subject(tmp_path):
         assert float(row["p"]) == pytest.approx(stats.wilcoxon(hi, lo).pvalue, rel=1e-3)
         cell = table2[(joint, "Overall (N m/rad)")]["high"]
         assert cell == f"{np.mean(hi):.1f} ({np.std(hi, ddof=1):.1f})"
+
+
+def test_cli_on_an_existing_scheduler(serial, inputs, client, tmp_path, capsys):
+    """``hop-impedance batch DIR --scheduler tcp://...``: the same outputs; exit 1 because two recordings failed."""
+    from hop_impedance.cli.main import main
+
+    out, _ = serial
+    address = client.scheduler.address
+    assert address.startswith("tcp://127.0.0.1:")
+    assert main(["batch", str(inputs), "--out", str(tmp_path), "--scheduler", address]) == 1
+    err = capsys.readouterr().err
+    assert "7 recordings: 5 analysed, 0 up to date (skipped), 2 failed" in err and "on 2 worker(s)" in err
+    a, b = _tree(out), _tree(tmp_path)
+    assert sorted(a) == sorted(b) and [k for k in a if a[k] != b[k]] == []
