@@ -384,12 +384,12 @@ def _write_outputs(items: list[BatchItem], summary: BatchSummary, out: Path, gro
 
 def summary_text(summary: BatchSummary, out: str) -> str:
     """The end-of-run summary (a few lines)."""
-    rate = summary.analysed / summary.seconds if summary.seconds > 0 else float("nan")
+    rate = f" ({summary.analysed / summary.seconds:.2f} recordings/s)" if summary.analysed and summary.seconds else ""
     lines = [
         f"hop-impedance batch: {summary.total} recordings: {summary.analysed} analysed, {summary.skipped} up to date "
         f"(skipped), {summary.failed} failed",
-        f"  {summary.stances} stances, {summary.fits} usable joint fits; {summary.seconds:.1f} s wall, cluster start included "
-        f"({rate:.2f} recordings/s) on {summary.workers} worker(s)",
+        f"  {summary.stances} stances, {summary.fits} usable joint fits; {summary.seconds:.1f} s wall, cluster start "
+        f"included{rate}, on {summary.workers} worker(s)",
         f"  outputs -> {out} (json/, tidy.parquet, tidy.csv, report/, failures.csv)",
     ]
     for name, _, reason in summary.failures[:5]:
