@@ -8,7 +8,7 @@ maximal moment per joint, or why the trial stopped (e.g. a take-off too weak
 to fly). The default posture is scenarios.DEFAULT_TOUCHDOWN_RHO
 (1.45, 0.50, 0.20).
 
-Usage: .venv/bin/python bench/simulator_posture_sweep.py [--freq 1.53] [--hops 3]
+Usage: .venv/bin/python bench/simulator_posture_sweep.py [--freq 1.53] [--hops 3] [--trunk]
        [--postures 1.45,0.5,0.2 1.45,0.42,0.1 ...]
 Without --postures a small grid around the default is run (~5 s per posture).
 """
@@ -21,16 +21,17 @@ import itertools
 import numpy as np
 
 from hop_impedance.simulation.hopping_trial import simulate_hopping
-from hop_impedance.simulation.scenarios import hopping_config
+from hop_impedance.simulation.scenarios import TRUNK_BALANCE, hopping_config
 
 GRID = [(a, k, h) for a, k, h in itertools.product((1.45, 1.6), (0.35, 0.42, 0.5, 0.6), (0.0, 0.1, 0.2))]
 
 
-def last_hop(posture: tuple[float, float, float], freq_hz: float, hops: int) -> str:
+def last_hop(posture: tuple[float, float, float], freq_hz: float, hops: int, trunk: bool = False) -> str:
     """One table row for ``posture`` = (ankle rho1, knee flexion, hip flexion) in rad."""
     rho = (posture[0], np.pi + posture[1], np.pi + posture[2])
     try:
-        chain, config = hopping_config(freq_hz, "hard", hops, touchdown_rho_rad=rho)
+        chain, config = hopping_config(freq_hz, "hard", hops, touchdown_rho_rad=rho,
+                                       trunk_balance=TRUNK_BALANCE if trunk else None)
         trial = simulate_hopping(chain, config, seed=1)
     except ValueError as exc:
         return f"| {posture} | {exc} |"
@@ -48,12 +49,13 @@ def main() -> None:
     parser.add_argument("--freq", type=float, default=1.53)
     parser.add_argument("--hops", type=int, default=3)
     parser.add_argument("--postures", nargs="*", default=None, help="ankle,knee,hip (rad) each")
+    parser.add_argument("--trunk", action="store_true", help="with the trunk-balance moment (scenarios.TRUNK_BALANCE)")
     args = parser.parse_args()
     postures = [tuple(float(v) for v in p.split(",")) for p in args.postures] if args.postures else GRID
     print(f"| touchdown posture (ankle rho1, knee flexion, hip flexion) rad | last hop at {args.freq} Hz |")
     print("|---|---|")
     for posture in postures:
-        print(last_hop(posture, args.freq, args.hops), flush=True)
+        print(last_hop(posture, args.freq, args.hops, args.trunk), flush=True)
 
 
 if __name__ == "__main__":

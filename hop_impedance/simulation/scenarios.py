@@ -18,7 +18,14 @@ from hop_impedance.recording import Subject
 from hop_impedance.simulation.dynamics import Chain, chain_from_body_model
 from hop_impedance.simulation.ground import GroundLaw, surface
 from hop_impedance.simulation.hopping_trial import HoppingConfig, touchdown_posture, touchdown_state
-from hop_impedance.simulation.impedance_laws import CompositeLaw, Eq3Law, ImpedanceLaw, PushOff, TimeActivation
+from hop_impedance.simulation.impedance_laws import (
+    CompositeLaw,
+    Eq3Law,
+    ImpedanceLaw,
+    PushOff,
+    TimeActivation,
+    TrunkBalance,
+)
 from hop_impedance.simulation.stance import simulate_stance
 
 #: The seed's mean subject (8 women): 54.8 kg, 1.63 m.
@@ -45,6 +52,11 @@ PUSH_OFF_WEIGHTS = (1.0, 0.6, 0.3)
 PUSH_OFF_BASE_NM = 40.0
 #: Time-based activation (seed 001 / Hurst): a_min and tau (s).
 ACTIVATION = TimeActivation(a_min=0.3, tau_s=0.04)
+#: Trunk balance (issue 17, hands on the waist): 800 N m/rad is about twice the trunk's
+#: inverted-pendulum stiffness at 3.5 body weights (31.9 kg x 3.5 g x 0.38 m ~ 410 N m/rad), so the
+#: trunk stays near its touchdown inclination; 40 N m s/rad damps its pitch (critical damping of the
+#: HAT about the hip with I ~ 1.45 + 31.9 x 0.38^2 ~ 6 kg m^2 would be 2 sqrt(800 x 6) ~ 140).
+TRUNK_BALANCE = TrunkBalance(800.0, 40.0)
 
 
 @dataclass(frozen=True)
@@ -123,6 +135,8 @@ def hopping_config(
     unexpected_hops: tuple[int, ...] = (),
     calibration_surface: str | None = None,
     variability: bool = True,
+    trunk_balance: TrunkBalance | None = None,
+    flight: str = "prescribed",
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
@@ -130,6 +144,8 @@ def hopping_config(
     onset at 35 % and duration 60 % of that stance. ``calibration_surface``
     (default: the trial's surface) is the surface the law is tuned for; with
     ``unexpected_surface`` the listed hops land on that surface instead.
+    ``trunk_balance`` (e.g. :data:`TRUNK_BALANCE`) and ``flight`` are passed to
+    :class:`HoppingConfig` (defaults: none, prescribed flight).
     """
     chain = chain_from_body_model(body_model_from_stature(subject))
     expected = surface(calibration_surface or surface_name)
@@ -147,6 +163,8 @@ def hopping_config(
         posture_sd_rad=0.01 if variability else 0.0,
         speed_sd=0.02 if variability else 0.0,
         push_sd=0.03 if variability else 0.0,
+        trunk_balance=trunk_balance,
+        flight=flight,
     )
     if surface_name != (calibration_surface or surface_name):
         config = HoppingConfig(**{**config.__dict__, "unexpected_surface": surface(surface_name),

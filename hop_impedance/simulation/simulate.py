@@ -9,6 +9,7 @@ import numpy as np
 from hop_impedance.biomech.body_model import body_model_from_stature
 from hop_impedance.recording import Recording, Subject
 from hop_impedance.simulation.hopping_trial import simulate_hopping
+from hop_impedance.simulation.impedance_laws import TrunkBalance
 from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, SEED_SUBJECT, Effects, hopping_config
 from hop_impedance.simulation.sensors import SensorConfig, sample_recording
 from hop_impedance.simulation.truth import trial_truth, truth_path, write_truth
@@ -29,6 +30,8 @@ def simulate_recording(
     unexpected_hops: tuple[int, ...] = (),
     variability: bool = True,
     generator: dict | None = None,
+    trunk_balance: TrunkBalance | None = None,
+    flight: str = "prescribed",
 ) -> tuple[Recording, dict]:
     """Simulate a hopping trial and sample it as a contract recording.
 
@@ -59,6 +62,8 @@ def simulate_recording(
         Seeded hop-to-hop variability on (posture, speed target, push-off).
     generator : dict, optional
         Stored as is in the truth file (e.g. the command line).
+    trunk_balance, flight :
+        Trunk-balance moment at the hip and flight model (:func:`hopping_config`; defaults: none, prescribed).
 
     Returns
     -------
@@ -69,7 +74,7 @@ def simulate_recording(
     chain, config = hopping_config(
         freq_hz, surface_name, n_hops, effects, subject=subject, touchdown_rho_rad=touchdown_rho_rad,
         unexpected_surface=unexpected_surface, unexpected_hops=unexpected_hops,
-        calibration_surface=tuned_for, variability=variability,
+        calibration_surface=tuned_for, variability=variability, trunk_balance=trunk_balance, flight=flight,
     )
     trial = simulate_hopping(chain, config, seed=seed)
     rng = np.random.default_rng([seed, 1])
