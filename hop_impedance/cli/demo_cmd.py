@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"replaying {args.recording} through replay -> stance_detector, inverse_dynamics -> "
           f"impedance_estimator -> recorder ({'separate processes' if args.processes else 'one process'})")
     report = run_pipeline(config_from_args(args))
-    code = print_report(report, args.recording)
+    code = print_report(report, args.recording, args.tolerate_loss)
     if args.rrd:
         from hop_impedance.viz.session import write_rrd
 

@@ -21,6 +21,8 @@ def add_pipeline_arguments(p: argparse.ArgumentParser, default_recording: str | 
     p.add_argument("--no-frames", action="store_true", help="do not publish per-frame /joint_kinetics")
     p.add_argument("--params-file", help="ROS 2 YAML parameter file (e.g. config/pipeline.yaml)")
     p.add_argument("--timeout", type=float, default=120.0, help="give up after this many seconds [120]")
+    p.add_argument("--tolerate-loss", action="store_true",
+                   help="exit 0 even when input messages were lost on the way (they are still reported)")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -49,12 +51,31 @@ def config_from_args(args: argparse.Namespace):
     )
 
 
-def print_report(report, recording: str) -> int:
-    """Print the table and the loss/diagnostic lines; return the exit code (0 when the run finished)."""
-    from hop_impedance.io.mcap_io import summarize
-    from hop_impedance.nodes.runner import loss_lines, stance_table
+def print_report(report, recording: str, tolerate_loss: bool = False) -> int:
+    """Print the table, losses and problems; return the exit code.
 
+    0 only when the run finished, no input check failed and no message was lost
+    (or ``tolerate_loss``); 1 otherwise; 130 after Ctrl-C. Problems are one line
+    each on stderr, never a traceback.
+    """
+    import sys
+
+    from hop_impedance.io.mcap_io import summarize
+    from hop_impedance.nodes.runner import loss_lines, messages_lost, stance_table
+
+    def problem(text: str) -> None:
+        print(f"hop-impedance pipeline: {text}", file=sys.stderr)
+
+    from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
+
+    for warning in report.input_warnings:
+        problem(f"warning: {warning}")
     counts = {i.topic: i.count for i in summarize(recording)}
+    missing = {FORCE_TOPIC: "no stances can be detected", MARKER_TOPIC: "stances have no joint data",
+               SUBJECT_TOPIC: "mass and height come from parameters or the run stops"}
+    for topic, consequence in missing.items():
+        if not counts.get(topic):
+            problem(f"warning: the recording has no {topic} messages: {consequence}")
     for line in stance_table(report):
         print(line)
     for line in loss_lines(report, counts):
@@ -69,19 +90,52 @@ def print_report(report, recording: str) -> int:
         except ValueError:
             return value
 
+    for joint in ("ankle", "knee", "hip"):  # one model structure per joint (impedance_estimator, recording_fits)
+        print(f"model {joint}: {report.diag(est, f'model_{joint}', '?')}")
     print(f"fit p50/p99: {ms('fit_p50_ms')}/{ms('fit_p99_ms')} ms; "
           f"take-off to profile p50/p99: {ms('takeoff_to_profile_p50_ms')}/{ms('takeoff_to_profile_p99_ms')} ms")
     print(f"output: {report.output_mcap}  ({report.wall_s:.1f} s wall)")
     if getattr(report, "rrd", None):
         print(f"Rerun recording: {report.rrd}  (open it with: .venv/bin/rerun {report.rrd})")
-    if not report.finished:
-        print("pipeline did not finish in time (see the losses above and the logs)")
+    for node in ("/stance_detector", "/inverse_dynamics"):
+        late = sum(int(report.diag(node, k, "0") or 0) for k in ("force_late_dropped", "markers_late_dropped"))
+        if late:
+            problem(f"warning: {node}: {late} input messages arrived later than the reorder window and were not used")
+    code = 0
+    for note in input_notes(report):
+        problem(note)
+        code = 1 if note.startswith("error") else code
+    if report.interrupted:
+        problem(f"interrupted; {len(report.summaries)} stances finished (table above)")
+        return 130
+    if report.died:
+        problem(f"error: {report.died}; {len(report.summaries)} stances finished (table above)")
         return 1
-    return 0
+    if not report.finished:
+        problem("error: did not finish in time (see the losses above and the logs)")
+        return 1
+    lost = messages_lost(report, counts)
+    if lost and not tolerate_loss:
+        problem(f"error: {lost} input messages lost on the way (lines above); pass --tolerate-loss to accept")
+        return 1
+    return code
+
+
+def input_notes(report) -> list[str]:
+    """The input check state the nodes published on /diagnostics, as ``error: ...`` / ``note: ...`` lines."""
+    out = []
+    for node, values in sorted(report.diagnostics.items()):
+        failure = values.get("input_check", "")
+        if failure and failure != "ok":
+            out.append(f"error: {node}: {failure}")
+        note = values.get("input_note", "")
+        if note:
+            out.append(f"note: {node}: {note}")
+    return out
 
 
 def run(args: argparse.Namespace) -> int:
     from hop_impedance.nodes.runner import run_pipeline
 
     report = run_pipeline(config_from_args(args))
-    return print_report(report, args.recording)
+    return print_report(report, args.recording, args.tolerate_loss)

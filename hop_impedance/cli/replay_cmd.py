@@ -33,15 +33,28 @@ def run(args: argparse.Namespace) -> int:
         Parameter("wait_for_subscribers_s", value=float(args.wait)),
         Parameter("reliable", value=not args.best_effort),
     ]
+    import sys
+
+    from rclpy.executors import ExternalShutdownException
+
+    interrupted = False
     with rclpy.init():
         node = ReplayNode(parameter_overrides=params)
         try:
             while rclpy.ok() and not node.finished.is_set():
                 rclpy.spin_once(node, timeout_sec=0.1)
-        except KeyboardInterrupt:
-            node.stop()
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        interrupted = not node.finished.is_set()
+        node.stop()
+        node.finished.wait(5.0)  # the playback thread ends before the context goes
         for topic, n in node.published.items():
             print(f"{topic}: {n} messages published")
-        if node.error:
-            raise ValueError(node.error)
+        for stop in node.stops:
+            print(f"hop-impedance replay: warning: {stop}", file=sys.stderr)
+    if interrupted:
+        print("hop-impedance replay: interrupted", file=sys.stderr)
+        return 130
+    if node.error:
+        raise ValueError(node.error)
     return 0

@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator
 
-from mcap.exceptions import McapError
 from mcap.reader import NonSeekingReader, SeekingReader
 from mcap.writer import CompressionType
 from mcap.writer import Writer as _McapWriter
@@ -86,7 +85,7 @@ def _check_file(path: str | Path) -> Path:
 
 
 class MessageStream:
-    """Iterate the decoded messages of chosen topics in log-time order.
+    """Iterate the decoded messages of chosen topics in log-time order, reading to the break.
 
     Parameters
     ----------
@@ -95,26 +94,40 @@ class MessageStream:
     topics : iterable of str, optional
         Topics to read; None reads all. Asking for a topic the file does not
         have is not an error here (see :func:`summarize` to check first).
+    decode : bool
+        False yields the raw CDR bytes as ``message`` (replay, recorder copy).
 
     Attributes
     ----------
     stopped_at : str or None
         After iteration, a one-line note if the file ended early (truncated or
-        corrupt), e.g. ``"truncated: read 5120 messages, stopped after t=3.201 s"``.
+        corrupt), e.g. ``"truncated or corrupt: read 5120 messages, stopped after t=3.201 s of
+        the recording (EndOfFile)"`` (t from the first message read).
+
+    Notes
+    -----
+    A file with a valid summary is read chunk by chunk through its index (log-time
+    order); one without (cut short, or still being written) front to back. Either
+    way reading stops at the first damaged record, and every message before it is
+    delivered: a file written by :class:`McapWriter` (chunks of at most 0.25 s)
+    loses at most the chunk the damage is in.
     """
 
-    def __init__(self, path: str | Path, topics: Iterable[str] | None = None):
+    def __init__(self, path: str | Path, topics: Iterable[str] | None = None, decode: bool = True):
         self.path = _check_file(path)
         self.topics = None if topics is None else list(topics)
+        self.decode = decode
         self.stopped_at: str | None = None
         self.count = 0
+        self.first_ns: int | None = None
+        self.last_ns: int | None = None
 
     def __iter__(self) -> Iterator[DecodedMessage]:
         with open(self.path, "rb") as fh:
             try:
                 reader = SeekingReader(fh, decoder_factories=[DecoderFactory()])
                 summary = reader.get_summary()
-            except (McapError, EOFError, ValueError, OSError, AssertionError):
+            except Exception:  # noqa: BLE001 - any damage in the footer/summary: read front to back
                 summary = None
             if summary is None or not summary.chunk_indexes and not summary.statistics:
                 # No usable summary (truncated or streamed file): read front to back.
@@ -126,55 +139,45 @@ class MessageStream:
             yield from self._iterate(reader, ordered)
 
     def _iterate(self, reader, log_time_order: bool) -> Iterator[DecodedMessage]:
-        last_ns = None
         try:
-            it = reader.iter_decoded_messages(topics=self.topics, log_time_order=log_time_order)
+            if self.decode:
+                it = reader.iter_decoded_messages(topics=self.topics, log_time_order=log_time_order)
+            else:
+                it = ((s, c, m, m.data) for s, c, m in reader.iter_messages(topics=self.topics, log_time_order=log_time_order))
             for schema, channel, message, decoded in it:
                 self.count += 1
-                last_ns = message.log_time
+                self.first_ns = message.log_time if self.first_ns is None else self.first_ns
+                self.last_ns = message.log_time
                 yield DecodedMessage(channel.topic, schema.name if schema else "", message.log_time, message.publish_time, decoded)
-        except (McapError, EOFError, AssertionError, ValueError) as exc:
-            where = f"after t={last_ns * 1e-9:.3f} s" if last_ns is not None else "before the first message"
+        except GeneratorExit:
+            raise
+        except Exception as exc:  # noqa: BLE001 - damage can surface as any parser/decompressor error
+            where = (f"after t={(self.last_ns - self.first_ns) * 1e-9:.3f} s of the recording"
+                     if self.last_ns is not None else "before the first message")
             self.stopped_at = f"truncated or corrupt: read {self.count} messages, stopped {where} ({type(exc).__name__})"
 
 
 def summarize(path: str | Path) -> list[TopicInfo]:
-    """Topics of a recording with counts and time spans (reads the whole file if it has no summary)."""
+    """Topics of a recording with counts and time spans (read to the break of a damaged file)."""
+    return read_summary(path)[0]
+
+
+def read_summary(path: str | Path) -> tuple[list[TopicInfo], str | None]:
+    """:func:`summarize` plus where reading stopped (None for an intact file)."""
     p = _check_file(path)
-    with open(p, "rb") as fh:
-        try:
-            summary = SeekingReader(fh).get_summary()
-        except (McapError, EOFError, ValueError, AssertionError):
-            summary = None
-    if summary is not None and summary.statistics is not None and summary.channels:
-        stats = summary.statistics
-        out = []
-        for cid, ch in summary.channels.items():
-            sch = summary.schemas.get(ch.schema_id)
-            n = stats.channel_message_counts.get(cid, 0)
-            out.append(TopicInfo(ch.topic, sch.name if sch else "", n, stats.message_start_time, stats.message_end_time))
-        # Per-topic spans need the messages; the statistics only give the file's span.
-        return _exact_spans(p, out)
-    return _exact_spans(p, [])
-
-
-def _exact_spans(path: Path, infos: list[TopicInfo]) -> list[TopicInfo]:
     counts: Counter[str] = Counter()
     first: dict[str, int] = {}
     last: dict[str, int] = {}
     names: dict[str, str] = {}
-    with open(path, "rb") as fh:
-        reader = NonSeekingReader(fh)
-        try:
-            for schema, channel, message in reader.iter_messages():
-                t = channel.topic
-                counts[t] += 1
-                first[t] = min(first.get(t, message.log_time), message.log_time)
-                last[t] = max(last.get(t, message.log_time), message.log_time)
-                names[t] = schema.name if schema else ""
-        except (McapError, EOFError, AssertionError, ValueError):
-            pass
-    return [TopicInfo(t, names[t], counts[t], first[t], last[t]) for t in sorted(counts)]
+    stream = MessageStream(p, decode=False)
+    for msg in stream:
+        t = msg.topic
+        counts[t] += 1
+        first[t] = min(first.get(t, msg.log_time_ns), msg.log_time_ns)
+        last[t] = max(last.get(t, msg.log_time_ns), msg.log_time_ns)
+        names[t] = msg.schema_name
+    infos = [TopicInfo(t, names[t], counts[t], first[t], last[t]) for t in sorted(counts)]
+    return infos, stream.stopped_at
 
 
 class McapWriter:
@@ -184,10 +187,18 @@ class McapWriter:
     dicts / objects with the message's fields (encoded with ``mcap_ros2``) or as
     CDR bytes already serialised by rclpy (:meth:`write_serialized`).
 
+    Chunks hold at most ``max_chunk_span_s`` of log time (default 0.25 s) and
+    ``chunk_size`` bytes, so a file cut short (crash, full disk, copy
+    interrupted) keeps every complete chunk: all but the last 0.25 s.
+    :meth:`flush` ends the chunk in progress and pushes it to the disk (the
+    recorder calls it every 0.5 s). The summary and index are written at
+    :meth:`close`.
+
     Use as a context manager; :meth:`close` is safe to call twice.
     """
 
-    def __init__(self, path: str | Path, compression: str = "zstd", chunk_size: int = 1 << 20):
+    def __init__(self, path: str | Path, compression: str = "zstd", chunk_size: int = 1 << 20,
+                 max_chunk_span_s: float = 0.25):
         self.path = Path(path)
         if self.path.parent and not self.path.parent.exists():
             raise RecordingError(f"{self.path.parent}: output folder does not exist")
@@ -201,6 +212,9 @@ class McapWriter:
         self._encoders: dict[str, Any] = {}
         self._sequence: Counter[str] = Counter()
         self._closed = False
+        self._span_ns = int(max_chunk_span_s * 1e9)
+        self._chunk_lo: int | None = None  # log-time range of the chunk in progress
+        self._chunk_hi: int | None = None
 
     def _channel(self, topic: str, type_name: str) -> int:
         name = schema_name(type_name)
@@ -231,6 +245,11 @@ class McapWriter:
     def write_serialized(self, topic: str, type_name: str, data: bytes, log_time_ns: int, publish_time_ns: int | None = None) -> None:
         """Write one message already serialised as CDR (e.g. by ``rclpy.serialization``)."""
         cid = self._channel(topic, type_name)
+        t = int(log_time_ns)
+        if self._chunk_lo is not None and max(self._chunk_hi, t) - min(self._chunk_lo, t) > self._span_ns:
+            self.flush()
+        self._chunk_lo = t if self._chunk_lo is None else min(self._chunk_lo, t)
+        self._chunk_hi = t if self._chunk_hi is None else max(self._chunk_hi, t)
         seq = self._sequence[topic]
         self._sequence[topic] += 1
         self._writer.add_message(
@@ -240,6 +259,12 @@ class McapWriter:
             sequence=seq,
             data=data,
         )
+
+    def flush(self) -> None:
+        """End the chunk in progress and write it to the file (readable even if the process dies next)."""
+        if not self._closed:
+            self._writer.flush()
+            self._chunk_lo = self._chunk_hi = None
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
         """Attach a metadata record (string key/values)."""

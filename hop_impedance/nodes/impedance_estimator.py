@@ -12,7 +12,24 @@ and publishes, per stance:
 - one ``StanceSummary`` on ``/impedance/stance_summary`` (reliable);
 - one ``ControllerImpedance`` on ``/impedance/controller`` (reliable,
   transient-local depth 1: a controller that starts late gets the latest
-  values at once). See docs/pipeline.md for how a controller uses it.
+  values at once), for *every* stance, accepted or not, and once at start
+  (all joints invalid). A joint is ``valid`` only if its stance passed the
+  input checks (:mod:`hop_impedance.input_checks`, run by ``inverse_dynamics``),
+  its fit was accepted and the fit is physically plausible
+  (:func:`hop_impedance.impedance.plausibility.controller_rejection`, bounds
+  from the parameters ``min_r_squared``, ``k0_factor``, ``k1_factor``,
+  ``damping_tolerance``). See docs/pipeline.md, "The controller's contract".
+
+A stance rejected by an input check turns this node's ``/diagnostics`` to
+ERROR with the rule's reason.
+
+Model structure (one per joint for the session, ``recording_fits``, "One
+model per trial"): ``model_terms`` (default the seed's reduced model k0, k1,
+b0) is fitted to every stance; with ``model_warmup_stances`` N > 0 the
+structure is instead chosen by the offline rule over the first N stances
+(fitted with the seed's k0, k1, b0 meanwhile) and kept from then on. The
+profiles' ``terms`` carry it and ``/diagnostics`` says which and why
+(``model_ankle``, ...).
 
 ``latency_s`` of a profile = wall-clock now minus the arrival of the first
 force sample at or after take-off at ``inverse_dynamics``
@@ -29,8 +46,9 @@ from rclpy.node import Node
 
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.biomech.stages import equivalent_linear_impedance
-from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares
-from hop_impedance.impedance.recording_fits import default_fit_options, fit_stance_joints
+from hop_impedance.impedance.plausibility import PlausibilityBounds, controller_damping, controller_rejection
+from hop_impedance.input_checks import INPUT_CHECK_PREFIX
+from hop_impedance.impedance.recording_fits import SEED_TERMS, StructureSelector, default_fit_options
 from hop_impedance.impedance.stance_fit import JointImpedanceFit
 from hop_impedance.nodes.common import (
     CONTROLLER_TOPIC, PROFILE_TOPIC, STANCE_KINETICS_TOPIC, SUMMARY_TOPIC, Diagnostics, declare, percentile_ms,
@@ -38,6 +56,7 @@ from hop_impedance.nodes.common import (
 )
 from hop_impedance.nodes.inverse_dynamics import stance_from_message
 from hop_impedance.nodes.qos import latched_qos, result_qos
+from hop_impedance.recording import GRAVITY_M_S2
 from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, StanceSummary
 
 
@@ -51,7 +70,20 @@ class ImpedanceEstimatorNode(Node):
         from hop_impedance.biomech.analysis import AnalysisOptions
 
         self.options = default_fit_options(AnalysisOptions(marker_cutoff_hz=cutoff, force_cutoff_hz=cutoff))
-        self.solvers: dict[str, ConstrainedLeastSquares] = {}
+        d = PlausibilityBounds()
+        self.bounds = PlausibilityBounds(
+            min_r_squared=declare(self, "min_r_squared", d.min_r_squared, "controller feed: least R^2 of a valid fit"),
+            k0_factor=declare(self, "k0_factor", d.k0_factor, "controller feed: k0 within this factor of Table 2 (mass-scaled)"),
+            k1_factor=declare(self, "k1_factor", d.k1_factor, "controller feed: |k1| at most this times Table 2 (mass-scaled)"),
+            damping_tolerance=declare(self, "damping_tolerance", d.damping_tolerance,
+                                      "controller feed: b_eq down to minus this is published as 0 (N m s/rad)"),
+        )
+        self.valid = np.zeros(3, int)
+        self.input_failure = ""
+        self.last_invalid = ""
+        warmup = declare(self, "model_warmup_stances", 0, "choose the model structure over the first N stances (0 = model_terms)")
+        terms = declare(self, "model_terms", list(SEED_TERMS), "model structure fitted to every stance when model_warmup_stances is 0")
+        self.selector = StructureSelector(self.options, None if warmup > 0 else list(terms), max(warmup, 1))
         self.fit_s: list[float] = []
         self.latency_s: list[float] = []
         self.stances_in = 0
@@ -61,14 +93,19 @@ class ImpedanceEstimatorNode(Node):
         self.pub_profile = self.create_publisher(ImpedanceProfile, PROFILE_TOPIC, result_qos())
         self.pub_summary = self.create_publisher(StanceSummary, SUMMARY_TOPIC, result_qos())
         self.pub_feed = self.create_publisher(ControllerImpedance, CONTROLLER_TOPIC, latched_qos())
+        self.pub_feed.publish(self.feed)  # nothing valid until a stance passed every check
         self.create_subscription(StanceKinetics, STANCE_KINETICS_TOPIC, self._on_stance, result_qos())
-        self.diagnostics = Diagnostics(self, diag, self._diag_values)
+        self.diagnostics = Diagnostics(self, diag, self._diag_values, self._diag_level)
 
     def _on_stance(self, msg: StanceKinetics) -> None:
         t_start = time.perf_counter()
         self.stances_in += 1
         stance = stance_from_message(msg)
-        fits = fit_stance_joints(stance, self.options, self.solvers)
+        was_fixed = self.selector.fixed
+        fits, _ = self.selector.fit(stance)
+        if self.selector.fixed and not was_fixed:
+            self.get_logger().info("model structure: " + "; ".join(
+                f"{j} {' '.join(s.terms)} ({s.reason})" for j, s in self.selector.structures.items()))
         self.fit_s.append(time.perf_counter() - t_start)
         latency = (time.time_ns() - msg.takeoff_received_ns) * 1e-9 if msg.takeoff_received_ns else math.nan
         if math.isfinite(latency):
@@ -80,9 +117,14 @@ class ImpedanceEstimatorNode(Node):
             else:
                 self.rejected[j] += 1
         self.pub_summary.publish(summary_message(msg, fits))
-        if any(f.ok for f in fits.values()):
-            update_feed(self.feed, msg, stance, fits)
-            self.pub_feed.publish(self.feed)
+        reasons = update_feed(self.feed, msg, stance, fits, self.bounds)
+        self.pub_feed.publish(self.feed)
+        for j, name in enumerate(JOINT_NAMES):
+            self.valid[j] += reasons[name] is None
+            if reasons[name] is not None:
+                self.last_invalid = f"stance {msg.stance_index} {name}: {reasons[name]}"
+        if msg.rejection_reason.startswith(INPUT_CHECK_PREFIX):
+            self.input_failure = msg.rejection_reason
         self.diagnostics.sample_ns = stamp_ns(msg.header.stamp)
 
     def _diag_values(self) -> dict:
@@ -93,7 +135,15 @@ class ImpedanceEstimatorNode(Node):
         for j, name in enumerate(JOINT_NAMES):
             out[f"{name}_accepted"] = int(self.accepted[j])
             out[f"{name}_rejected"] = int(self.rejected[j])
+            s = self.selector.structures[name]
+            out[f"model_{name}"] = f"{' '.join(s.terms)}: {s.reason}"
+            out[f"{name}_controller_valid"] = int(self.valid[j])
+        out["last_controller_invalid"] = self.last_invalid
+        out["input_check"] = self.input_failure or "ok"
         return out
+
+    def _diag_level(self) -> tuple[int, str]:
+        return (2, self.input_failure) if self.input_failure else (0, "ok")
 
 
 def _c(fit: JointImpedanceFit, name: str) -> float:
@@ -176,13 +226,21 @@ def _empty_feed() -> ControllerImpedance:
     return msg
 
 
-def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result, fits: dict[str, JointImpedanceFit]) -> None:
-    """Overwrite the accepted joints' entries of the controller feed with this stance's values.
+def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result, fits: dict[str, JointImpedanceFit],
+                bounds: PlausibilityBounds | None = None) -> dict[str, str | None]:
+    """Update the controller feed with this stance; returns why each joint is not valid (None = valid).
 
-    ``tau0`` is the fitted moment at touchdown (``m0``, 0 if reduced away);
-    the equivalent linear impedance comes from
-    :func:`stages.equivalent_linear_impedance` on the measured moment.
-    Rejected joints keep their previous values and get ``valid = false``.
+    A joint is valid when the stance has no rejection reason (input checks, loss,
+    markers), its fit was accepted and
+    :func:`~hop_impedance.impedance.plausibility.controller_rejection` finds it
+    physically plausible; its entries are then overwritten with this stance's
+    values. ``tau0`` is the fitted moment at touchdown (``m0``, 0 if reduced
+    away); the equivalent linear impedance comes from
+    :func:`stages.equivalent_linear_impedance` on the measured moment, b_eq
+    published through :func:`~hop_impedance.impedance.plausibility.controller_damping`
+    (never negative). Invalid joints keep their previous values and get
+    ``valid = false``. Body mass (for the Table 2 scaling) is the one
+    inverse_dynamics used: ``peak_grf_n / (peak_grf_bw g)``.
     """
     feed.header = stance.header
     feed.stance_index = stance.stance_index
@@ -190,21 +248,32 @@ def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result
         "k0_nm_per_rad", "k1_nm_per_rad2", "b0_nms_per_rad", "rho0_rad", "omega0_rad_s", "tau0_nm",
         "stiffness_eq_nm_per_rad", "damping_eq_nms_per_rad", "equilibrium_angle_rad")}
     valid = list(feed.valid)
+    reasons: dict[str, str | None] = {}
+    mass = stance.peak_grf_n / (stance.peak_grf_bw * GRAVITY_M_S2) if stance.peak_grf_bw > 0 else math.nan
+    hop_f = stance.hop_frequency_hz if math.isfinite(stance.hop_frequency_hz) else None
     for j, name in enumerate(JOINT_NAMES):
         fit = fits[name]
-        valid[j] = fit.ok
-        if not fit.ok:
-            continue
-        data = stance_result.joints.joint(name)
-        k_eq, b_eq, theta_eq = equivalent_linear_impedance(data["angle_rad"], data["angular_velocity_rad_s"], data["moment_nm"])
-        values = {"k0_nm_per_rad": _c(fit, "k0"), "k1_nm_per_rad2": _c(fit, "k1"), "b0_nms_per_rad": _c(fit, "b0"),
-                  "rho0_rad": float(fit.rho0), "omega0_rad_s": float(fit.omega0), "tau0_nm": _c(fit, "m0"),
-                  "stiffness_eq_nm_per_rad": k_eq, "damping_eq_nms_per_rad": b_eq, "equilibrium_angle_rad": theta_eq}
-        for key, v in values.items():
-            arrays[key][j] = v
+        reason = stance.rejection_reason or None
+        values = None
+        if reason is None and stance_result.joints is not None:
+            data = stance_result.joints.joint(name)
+            k_eq, b_eq, theta_eq = equivalent_linear_impedance(data["angle_rad"], data["angular_velocity_rad_s"], data["moment_nm"])
+            reason = controller_rejection(name, fit, k_eq, b_eq, hop_f, mass, bounds)
+            values = {"k0_nm_per_rad": _c(fit, "k0"), "k1_nm_per_rad2": _c(fit, "k1"), "b0_nms_per_rad": _c(fit, "b0"),
+                      "rho0_rad": float(fit.rho0), "omega0_rad_s": float(fit.omega0), "tau0_nm": _c(fit, "m0"),
+                      "stiffness_eq_nm_per_rad": k_eq, "damping_eq_nms_per_rad": controller_damping(b_eq),
+                      "equilibrium_angle_rad": theta_eq}
+        elif reason is None:
+            reason = fit.rejection_reason or "no joint data"
+        reasons[name] = reason
+        valid[j] = reason is None
+        if reason is None:
+            for key, v in values.items():
+                arrays[key][j] = v
     for key, v in arrays.items():
         setattr(feed, key, v)
     feed.valid = valid
+    return reasons
 
 
 def main(args=None) -> None:

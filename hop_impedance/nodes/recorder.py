@@ -12,7 +12,10 @@ Times: ``log_time`` = the message's ``header.stamp`` (the sample clock,
 so outputs sit next to the input samples they come from: a profile at its
 take-off), ``publish_time`` = the wall-clock receive time. Every pipeline
 message starts with a ``std_msgs/Header``, read straight from the CDR bytes.
-The file is finished (index and summary written) when the node is destroyed.
+The file is finished (index and summary written) when the node is destroyed;
+until then the chunk in progress is flushed to the disk every ``flush_period_s``
+(0.5 s), so a recorder killed with SIGKILL leaves a file readable (``info``,
+``analyze``, ``replay`` read to the break) up to its last flush.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from pathlib import Path
 
 from rclpy.node import Node
 
-from hop_impedance.io.mcap_io import McapWriter
+from hop_impedance.io.mcap_io import McapWriter, MessageStream
 from hop_impedance.nodes.common import OUTPUT_TOPICS, TOPIC_TYPES, InputTracker, ProgressReporter, declare, header_stamp_ns
 from hop_impedance.nodes.message_types import message_class
 from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
@@ -38,6 +41,7 @@ class RecorderNode(Node):
         topics = declare(self, "topics", list(OUTPUT_TOPICS), "topics to record (type from the pipeline's topic table)")
         source = declare(self, "copy_inputs_from", "", "copy the input topics of this MCAP into the output first")
         reliable = declare(self, "reliable_inputs", True, "QoS reliability used for recorded input topics")
+        flush_s = declare(self, "flush_period_s", 0.5, "write the chunk in progress to the disk this often (s)")
         if not self.output:
             raise ValueError("recorder: parameter 'output' is required")
         unknown = [t for t in topics if t not in TOPIC_TYPES]
@@ -52,6 +56,8 @@ class RecorderNode(Node):
                 input_qos(reliable) if topic in (FORCE_TOPIC, MARKER_TOPIC) else result_qos(5000))
             self.create_subscription(message_class(TOPIC_TYPES[topic]), topic, self._writer_for(topic), qos, raw=True)
         self.progress = ProgressReporter(self, self.trackers, period_s=0.05)
+        self.writer.flush()  # the copied inputs are on the disk before the first output arrives
+        self.create_timer(flush_s, self.writer.flush)
 
     def _writer_for(self, topic: str):
         type_name = TOPIC_TYPES[topic]
@@ -75,14 +81,12 @@ class RecorderNode(Node):
 
 
 def copy_messages(path: str, writer: McapWriter, topics: tuple[str, ...] = (FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC)) -> int:
-    """Copy ``topics`` of an MCAP file into ``writer`` unchanged (CDR bytes, log and publish times)."""
-    from mcap.reader import make_reader
-
+    """Copy ``topics`` of an MCAP file into ``writer`` unchanged (CDR bytes, log and publish times), to the break."""
     n = 0
-    with open(path, "rb") as fh:
-        for schema, channel, message in make_reader(fh).iter_messages(topics=list(topics), log_time_order=True):
-            writer.write_serialized(channel.topic, schema.name, message.data, message.log_time, message.publish_time)
-            n += 1
+    stream = MessageStream(path, topics=list(topics), decode=False)
+    for m in stream:
+        writer.write_serialized(m.topic, m.schema_name, m.message, m.log_time_ns, m.publish_time_ns)
+        n += 1
     return n
 
 

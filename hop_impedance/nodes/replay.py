@@ -45,6 +45,7 @@ with transient-local durability, as the contract asks.
 
 from __future__ import annotations
 
+import bisect
 import threading
 import time
 
@@ -60,6 +61,8 @@ from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
 from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
 
 DEFAULT_TOPICS = [FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC]
+#: Published stamps kept per topic for rate-0 pacing (10 s at 1 kHz; more than ``max_ahead_s`` needs).
+PACING_HISTORY = 10_000
 
 
 def _raw_messages(path: str, topics: list[str], stops: list[str] | None = None):
@@ -114,8 +117,7 @@ class ReplayNode(Node):
         self.published = {t: 0 for t in self.topics}
         #: Where reading a damaged file stopped (one line per pass), shown by the CLI.
         self.stops: list[str] = []
-        self._last_published: dict[str, int] = {}  # topic -> newest stamp published (ns)
-        self._first_published: dict[str, int] = {}  # topic -> first stamp published (ns)
+        self._published_stamps: dict[str, list[int]] = {}  # topic -> increasing stamps published (ns), recent
         self.finished = threading.Event()
         self.error: str | None = None
         self._pubs: dict[str, rclpy.publisher.Publisher] = {}
@@ -167,6 +169,8 @@ class ReplayNode(Node):
             self.error = str(exc)
             self.get_logger().error(self.error)
         except Exception as exc:  # an unexpected failure must still end the replay visibly  # noqa: BLE001
+            if self._stop.is_set() or not self.context.ok():
+                return  # Ctrl-C / shutdown while publishing: a stop, not a failure (finally still runs)
             self.error = f"replay failed: {type(exc).__name__}: {exc}"
             self.get_logger().error(self.error)
         finally:
@@ -200,8 +204,7 @@ class ReplayNode(Node):
                     self._wait_for_consumers()
             pub.publish(payload)
             if topic != SUBJECT_TOPIC:
-                self._first_published.setdefault(topic, stamp)
-                self._last_published[topic] = max(self._last_published.get(topic, stamp), stamp)
+                self._note_published(topic, stamp)
             self.published[topic] += 1
             n += 1
             if self.rate == 0 and not self.consumers and n % block == 0:
@@ -228,22 +231,33 @@ class ReplayNode(Node):
             self._progress_event.set()
 
     def _behind(self, node: str, now: float, t_wait: float) -> bool:
-        """Whether ``node`` lags more than ``max_ahead_s`` behind what was *published* on a topic it consumes.
+        """Whether ``node`` has not processed a message published more than ``max_ahead_s`` (stamp time) before the newest.
 
-        Measured against the newest stamp already published on each topic (not the
-        stamp about to go out), so a gap in the stamps, a block of late messages or
-        a topic the file does not have (force-only, marker-only) never makes the
-        replay wait for data it has not sent: the consumer can always catch up to
-        within its reorder window, far less than ``max_ahead_s``.
+        Measured against the stamps actually published on each topic the node
+        consumes (not the stamp about to go out, nor a stamp difference), so a gap
+        in the stamps, a block of late messages or a topic the file does not have
+        (force-only, marker-only) never makes the replay wait for data it has not
+        sent: a consumer holding back only its reorder window is never behind.
         """
         consumed, seen = self.progress.get(node, ({}, t_wait))
         if now - seen > self.consumer_timeout_s:
             return False  # silent (crashed or never started): do not stall on it
         for topic, done in consumed.items():
-            last = self._last_published.get(topic)
-            if last is not None and last - max(done, self._first_published[topic]) > self.max_ahead_ns:
+            stamps = self._published_stamps.get(topic)
+            if not stamps:
+                continue
+            i = bisect.bisect_right(stamps, done)
+            if i < len(stamps) and stamps[i] <= stamps[-1] - self.max_ahead_ns:
                 return True
         return False
+
+    def _note_published(self, topic: str, stamp: int) -> None:
+        """Keep the increasing published stamps of ``topic`` (late, older stamps are no pacing target)."""
+        stamps = self._published_stamps.setdefault(topic, [])
+        if not stamps or stamp > stamps[-1]:
+            stamps.append(stamp)
+            if len(stamps) > 2 * PACING_HISTORY:
+                del stamps[:PACING_HISTORY]
 
     def _wait_for_consumers(self) -> None:
         """Block until no live consumer is more than ``max_ahead_s`` behind the published data."""
@@ -286,15 +300,17 @@ def _desc(text: str):
 
 
 def main(args=None) -> None:
-    """Run the replay node until the recording has been played (or Ctrl-C)."""
+    """Run the replay node until the recording has been played (or Ctrl-C / SIGTERM)."""
     from rclpy.executors import ExternalShutdownException
 
     from hop_impedance.nodes.common import wants_help
 
-    if wants_help(args):
+    if wants_help(args):  # print the parameters without starting ROS (checked by test/test_colcon_workspace.py)
         print(__doc__)
         return
+    failed = None
     with rclpy.init(args=args):
+        node = None
         try:
             node = ReplayNode()
             while rclpy.ok() and not node.finished.is_set():
@@ -302,8 +318,17 @@ def main(args=None) -> None:
             node._end_pub.wait_for_all_acked(Duration(seconds=5.0))  # the latched end-of-stream must reach the consumers
             for topic, n in node.published.items():
                 node.get_logger().info(f"{topic}: {n} messages")
+            for stop in node.stops:
+                node.get_logger().warning(stop)
+            failed = node.error
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
+        finally:
+            if node is not None:
+                node.stop()
+                node.finished.wait(5.0)
+    if failed:
+        raise SystemExit(2)  # the runner reports "node replay exited with code 2" and the log's error line
 
 
 if __name__ == "__main__":

@@ -108,6 +108,12 @@ class PipelineReport:
     rrd: str = ""
     #: In-process runs: wall time from the replay's first message to its end-of-stream (s).
     replay_play_s: float = float("nan")
+    #: ``--processes``: which node died and how (one line), empty when none did.
+    died: str = ""
+    #: Ctrl-C / SIGTERM ended the run before the stream was through.
+    interrupted: bool = False
+    #: Where reading the recording stopped (a truncated or damaged file), one line each.
+    input_warnings: list = field(default_factory=list)
 
     def received(self, node: str, topic: str) -> int:
         """Messages of ``topic`` the node ``node`` reported received (0 if unknown)."""
@@ -118,6 +124,10 @@ class PipelineReport:
 
     def diag(self, node: str, key: str, default: str = "") -> str:
         return self.diagnostics.get(node, {}).get(key, default)
+
+
+class NodeDied(Exception):
+    """A node process exited with an error before the run was over (message: which, how, its log)."""
 
 
 class ResultCollector(Node):
@@ -170,22 +180,39 @@ def node_parameters(cfg: PipelineConfig) -> dict[str, dict]:
 
 def run_pipeline(cfg: PipelineConfig) -> PipelineReport:
     """Run the node graph on ``cfg.recording``; see the module docstring."""
+    from hop_impedance.io.mcap_io import read_summary
+
     if not Path(cfg.recording).exists():
         raise FileNotFoundError(f"{cfg.recording}: no such recording")
+    infos, stopped = read_summary(cfg.recording)  # one-line RecordingError for an empty / non-MCAP file
+    if not {i.topic for i in infos} & {FORCE_TOPIC, MARKER_TOPIC}:
+        raise ValueError(f"{cfg.recording}: no {FORCE_TOPIC} or {MARKER_TOPIC} messages to replay"
+                         + (f" ({stopped})" if stopped else ""))
     Path(cfg.out_dir).mkdir(parents=True, exist_ok=True)
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-    return _run_processes(cfg) if cfg.processes else _run_in_process(cfg)
+    report = _run_processes(cfg) if cfg.processes else _run_in_process(cfg)
+    if stopped:
+        report.input_warnings.append(f"{Path(cfg.recording).name}: {stopped}; replayed up to there")
+    return report
 
 
 def _spin_until_done(executor, collector: ResultCollector, cfg: PipelineConfig, t0: float, alive=lambda: None) -> None:
+    """Spin until done or the time limit; a dead node (:class:`NodeDied`) or Ctrl-C end it early, in the report."""
+    from rclpy.executors import ExternalShutdownException
+
     deadline = t0 + cfg.timeout_s
-    while time.monotonic() < deadline and not collector.done():
-        executor.spin_once(timeout_sec=0.05)
-        alive()
-    end = time.monotonic() + 0.3  # let the last diagnostics / controller message in
-    while time.monotonic() < end:
-        executor.spin_once(timeout_sec=0.05)
-    collector.report.finished = collector.done()
+    try:
+        while time.monotonic() < deadline and not collector.done():
+            executor.spin_once(timeout_sec=0.05)
+            alive()
+        end = time.monotonic() + 0.3  # let the last diagnostics / controller message in
+        while time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.05)
+    except NodeDied as exc:
+        collector.report.died = str(exc)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        collector.report.interrupted = True
+    collector.report.finished = collector.done() and not collector.report.died
 
 
 def _in_process_nodes(cfg: PipelineConfig, context) -> list[Node]:
@@ -235,6 +262,7 @@ def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
         _wait_for_bridge(executor, nodes, len(collector.report.summaries))
         replay = nodes[-1]
         replay.stop()
+        replay.finished.wait(5.0)  # the playback thread ends before its node is destroyed
         collector.report.replay_play_s = replay.play_s or float("nan")
         if replay.error:
             raise ValueError(replay.error)
@@ -242,7 +270,7 @@ def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
     finally:
         for n in reversed(nodes):
             n.destroy_node()
-        rclpy.shutdown(context=context)
+        context.try_shutdown()  # already shut down after Ctrl-C
     report.wall_s = time.monotonic() - t0
     report.output_mcap = cfg.output_mcap
     report.rrd = str(cfg.rerun_save or "")
@@ -326,25 +354,34 @@ def ready_subscriptions(cfg: PipelineConfig) -> dict[str, int]:
     return out
 
 
+#: Publishers the collector must have discovered before the replay starts: its own readers are then
+#: matched (measured under load: a collector that saw every subscription but not yet the estimator's
+#: publishers received none of the 10 summaries of a 3 s rate-0 run).
+READY_PUBLISHERS = {STANCE_KINETICS_TOPIC: 1, SUMMARY_TOPIC: 1, PROFILE_TOPIC: 1, CONTROLLER_TOPIC: 1}
+
+
 def _wait_for_graph(executor, node: Node, expected: dict[str, int], deadline: float, alive=lambda: None) -> None:
-    """Spin until ``node`` sees at least ``expected[topic]`` subscriptions on each topic (or raise at ``deadline``)."""
+    """Spin until ``node`` sees ``expected[topic]`` subscriptions and the :data:`READY_PUBLISHERS` (or raise at ``deadline``)."""
     while True:
         missing = {t: n for t, n in expected.items() if node.count_subscribers(t) < n}
+        missing |= {t: n for t, n in READY_PUBLISHERS.items() if node.count_publishers(t) < n}
         if not missing:
             return
         if time.monotonic() > deadline:
-            raise RuntimeError(f"nodes not up in time; subscriptions missing on {sorted(missing)}")
+            raise ValueError(f"nodes not up in time; subscriptions missing on {sorted(missing)} (see the node logs)")
         alive()
         executor.spin_once(timeout_sec=0.05)
 
 
 def _watch(children: dict[str, subprocess.Popen], log_dir: Path):
-    """A check that raises when a child exited with an error (the replay exits 0 when done)."""
+    """A check that raises :class:`NodeDied` when a child exited with an error (the replay exits 0 when done)."""
 
     def alive() -> None:
         for name, p in children.items():
-            if p.poll() not in (None, 0):
-                raise RuntimeError(f"node {name} exited with code {p.returncode}; see {log_dir / (name + '.log')}")
+            code = p.poll()
+            if code not in (None, 0):
+                how = f"was killed by signal {-code} ({signal.Signals(-code).name})" if code < 0 else f"exited with code {code}"
+                raise NodeDied(f"node {name} {how}; see {log_dir / (name + '.log')}")
 
     return alive
 
@@ -365,15 +402,18 @@ def _run_processes(cfg: PipelineConfig) -> PipelineReport:
         names = NODE_MODULES[:-1] + ("rerun_bridge",) if cfg.with_rerun else NODE_MODULES[:-1]
         children = start_children(names, cfg, log_dir)
         alive = _watch(children, log_dir)
-        _wait_for_graph(executor, collector, ready_subscriptions(cfg), t0 + cfg.timeout_s, alive)
-        children |= start_children(("replay",), cfg, log_dir)
-
-        _spin_until_done(executor, collector, cfg, t0, alive)
+        try:
+            _wait_for_graph(executor, collector, ready_subscriptions(cfg), t0 + cfg.timeout_s, alive)
+        except NodeDied as exc:
+            collector.report.died = str(exc)
+        else:
+            children |= start_children(("replay",), cfg, log_dir)
+            _spin_until_done(executor, collector, cfg, t0, alive)
         report = collector.report
     finally:
         stop_children(children)
         collector.destroy_node() if "collector" in locals() else None
-        rclpy.shutdown(context=context)
+        context.try_shutdown()  # already shut down after Ctrl-C
     report.wall_s = time.monotonic() - t0
     report.output_mcap = cfg.output_mcap
     report.rrd = str(cfg.rerun_save or "")
@@ -408,16 +448,24 @@ def _n(x: float, width: int, digits: int) -> str:
 
 def loss_lines(report: PipelineReport, file_counts: dict[str, int]) -> list[str]:
     """Messages in the file vs received per consumer, and the losses the nodes counted."""
-    out = []
-    for node in CONSUMERS:
-        for topic in (FORCE_TOPIC, MARKER_TOPIC):
-            if node == "/stance_detector" and topic == MARKER_TOPIC:
-                continue
-            got = report.received(node, topic)
-            sent = file_counts.get(topic, 0)
-            out.append(f"{node} {topic}: {got} of {sent} received, {max(sent - got, 0)} lost")
+    out = [f"{node} {topic}: {got} of {sent} received, {max(sent - got, 0)} lost"
+           for node, topic, got, sent in _consumer_counts(report, file_counts)]
     between = report.diag("/inverse_dynamics", "force_lost_between_stances", "0")
     if between not in ("0", ""):
         out.append(f"/inverse_dynamics: {between} force samples lost outside reported stances "
                    "(flights, or whole stances never detected; stances with losses inside are rejected)")
     return out
+
+
+def _consumer_counts(report: PipelineReport, file_counts: dict[str, int]):
+    """(consumer, input topic, received, in the file) for every consumer and the inputs it subscribes."""
+    for node in CONSUMERS:
+        for topic in (FORCE_TOPIC, MARKER_TOPIC):
+            if node == "/stance_detector" and topic == MARKER_TOPIC:
+                continue
+            yield node, topic, report.received(node, topic), file_counts.get(topic, 0)
+
+
+def messages_lost(report: PipelineReport, file_counts: dict[str, int]) -> int:
+    """Input messages of the file some consumer did not receive (sum over consumers and topics)."""
+    return sum(max(sent - got, 0) for _, _, got, sent in _consumer_counts(report, file_counts))

@@ -1,0 +1,69 @@
+"""The controller's plausibility rule (hop_impedance/impedance/plausibility.py) on real fits of a
+bundled recording, and on the fits a wrong-signed force produces."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from hop_impedance.biomech.analysis import analyze_recording
+from hop_impedance.biomech.stages import equivalent_linear_impedance
+from hop_impedance.impedance.plausibility import (
+    SEED_BODY_MASS_KG, PlausibilityBounds, controller_damping, controller_rejection, table2_band,
+)
+from hop_impedance.impedance.recording_fits import fit_recording
+from hop_impedance.impedance.synthetic import TABLE2_COEFFICIENTS
+from test.cli import bad_recordings as bad
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    analysis = analyze_recording(bad.bundled())
+    return analysis, fit_recording(analysis)
+
+
+def _verdicts(analysis, fits, bounds=None):
+    out = []
+    for stance, stance_fits in zip(analysis.stances, fits):
+        for joint, fit in stance_fits.items():
+            d = stance.joints.joint(joint)
+            k_eq, b_eq, _ = equivalent_linear_impedance(d["angle_rad"], d["angular_velocity_rad_s"], d["moment_nm"])
+            out.append((joint, b_eq, controller_rejection(joint, fit, k_eq, b_eq, stance.hop_frequency_hz,
+                                                          analysis.subject.body_mass_kg, bounds)))
+    return out
+
+
+def test_every_fit_of_the_bundled_2p20_recording_is_valid(fitted):
+    verdicts = _verdicts(*fitted)
+    assert len(verdicts) == 30 and all(reason is None for _, _, reason in verdicts)
+    b_eq = np.array([b for _, b, _ in verdicts])
+    # the documented scatter of the OLS damping around 0 (docs/pipeline.md): all within the tolerance
+    assert -1.8 < b_eq.min() and b_eq.max() < 0  # -1.75 to -0.16 N m s/rad measured
+    strict = _verdicts(*fitted, PlausibilityBounds(damping_tolerance=0.0))
+    assert sum(r is None for _, _, r in strict) <= 3  # why the tolerance exists
+    assert controller_damping(-0.9) == 0.0 and controller_damping(1.5) == 1.5
+
+
+def test_table2_band_is_mass_scaled_and_nearest_frequency():
+    lo, hi, k1_max = table2_band("ankle", 2.18, 2 * SEED_BODY_MASS_KG, PlausibilityBounds())
+    k0, k1 = TABLE2_COEFFICIENTS[2.20]["ankle"]
+    assert lo == pytest.approx(2 * k0 / 5) and hi == pytest.approx(2 * k0 * 5) and k1_max == pytest.approx(2 * k1 * 5)
+    lo_all, hi_all, _ = table2_band("hip", None, SEED_BODY_MASS_KG, PlausibilityBounds())
+    assert lo_all == pytest.approx(95.3 / 5) and hi_all == pytest.approx(175.4 * 5)
+
+
+def test_implausible_fits_are_named(fitted):
+    analysis, fits = fitted
+    stance, fit = analysis.stances[1], fits[1]["knee"]
+    d = stance.joints.joint("knee")
+    k_eq, b_eq, _ = equivalent_linear_impedance(d["angle_rad"], d["angular_velocity_rad_s"], d["moment_nm"])
+    mass, f = analysis.subject.body_mass_kg, stance.hop_frequency_hz
+    assert controller_rejection("knee", fit, -k_eq, b_eq, f, mass).startswith("implausible: k_eq")
+    assert controller_rejection("knee", fit, k_eq, -5.0, f, mass).startswith("implausible: b_eq -5.00")
+    assert controller_rejection("knee", replace(fit, r_squared=0.3), k_eq, b_eq, f, mass).startswith("implausible: R^2 0.300")
+    tiny = replace(fit, coefficients={**fit.coefficients, "k0": 10.0})
+    assert "implausible: k0 10.0 N m/rad outside" in controller_rejection("knee", tiny, k_eq, b_eq, f, mass)
+    negative = replace(fit, stiffness=np.array([50.0, -3.0]))
+    assert controller_rejection("knee", negative, k_eq, b_eq, f, mass).startswith("implausible: K(rho) reaches -3.0")
+    huge = replace(fit, coefficients={**fit.coefficients, "k1": 1e5})
+    assert controller_rejection("knee", huge, k_eq, b_eq, f, mass).startswith("implausible: |k1|")

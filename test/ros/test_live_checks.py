@@ -1,0 +1,166 @@
+"""Issue 14, live half: the pipeline on bad recordings built from a bundled one.
+
+Each run is the real node graph (rclpy, DDS on loopback, the recorder's MCAP);
+assertions read the exit status ``print_report`` returns, its lines, the
+rows, and every ``ControllerImpedance`` the recorder wrote (none may be valid
+for a bad input). Runs are in-process (~3-5 s each) except the node-death test.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from hop_impedance.cli.main import main
+from hop_impedance.cli.pipeline_cmd import print_report
+from hop_impedance.io.mcap_io import MessageStream
+from hop_impedance.nodes.common import CONTROLLER_TOPIC, STANCE_KINETICS_TOPIC, stamp_ns
+from hop_impedance.nodes.runner import PipelineConfig, run_pipeline
+from test.cli import bad_recordings as bad
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def rec():
+    return bad.bundled()
+
+
+def _run(path, out, capfd, **kw):
+    report = run_pipeline(PipelineConfig(recording=str(path), out_dir=str(out), timeout_s=60.0, **kw))
+    code = print_report(report, str(path))
+    captured = capfd.readouterr()
+    return report, code, captured.out + captured.err
+
+
+def _recorded(report, topic):
+    return [m.message for m in MessageStream(report.output_mcap, topics=[topic])]
+
+
+@pytest.mark.parametrize(("make", "rule"), [
+    (bad.plate_sign, "force_sign"),
+    (bad.no_subject, "subject_missing"),
+    (bad.upper_case_names, "marker_names"),
+    (bad.millimetres, "marker_units"),
+])
+def test_bad_input_never_reaches_the_controller_as_valid(tmp_path, capfd, rec, make, rule):
+    path = bad.write(tmp_path / "bad.mcap", make(rec))
+    report, code, text = _run(path, tmp_path / "out", capfd)
+    assert code == 1 and "Traceback" not in text
+    assert f"error: /inverse_dynamics: input check {rule}:" in text
+    assert report.diag("/inverse_dynamics", "input_check").startswith(f"input check {rule}:")
+    stances = _recorded(report, STANCE_KINETICS_TOPIC)
+    assert stances and all(s.rejection_reason.startswith(f"input check {rule}:") for s in stances)
+    assert len(report.summaries) == len(stances)
+    feeds = _recorded(report, CONTROLLER_TOPIC)
+    assert feeds and not any(any(f.valid) for f in feeds)
+
+
+def test_live_rows_match_analyze_and_duplicates_kill_nothing(tmp_path, capfd, rec):
+    """10 % duplicated messages and a 0.3 s force gap in one stance: the live rows equal analyze's, by touchdown stamp."""
+    from hop_impedance.biomech.analysis import analyze_recording
+
+    clean = analyze_recording(rec)
+    s = next(s for s in clean.stances if s.rejection_reason is None and s.index >= 3)
+    holed = bad.gap(rec, s.touchdown_s + 0.04, 0.3, markers=False)
+    path = bad.write(tmp_path / "dup_gap.mcap", bad.duplicates(holed, 0.1, seed=5))
+    assert main(["analyze", str(path), "--json", str(tmp_path / "a.json"), "--no-fit"]) == 0
+    offline = {r["touchdown_stamp_ns"]: r["rejection_reason"] for r in json.loads((tmp_path / "a.json").read_text())["stances"]}
+    report, code, text = _run(path, tmp_path / "out", capfd)
+    assert code == 0 and report.finished and "Traceback" not in text
+    live = {stamp_ns(m.touchdown_stamp): (m.rejection_reason or None) for m in _recorded(report, STANCE_KINETICS_TOPIC)}
+    assert len(live) == len(offline) >= 8
+    for td, reason in live.items():
+        match = min(offline, key=lambda t: abs(t - td))
+        assert abs(match - td) <= 1_000_000  # same touchdown within one force sample
+        assert reason == offline[match]
+    assert sum(r is not None and "(message loss)" in r for r in live.values()) == 1
+    assert int(report.diag("/inverse_dynamics", "force_duplicates_dropped")) + int(
+        report.diag("/inverse_dynamics", "force_late_dropped")) >= int(0.1 * len(holed.force))
+
+
+@pytest.mark.parametrize("kind", ["gap_and_late_block", "force_only", "marker_only"])
+def test_paced_replay_never_waits_for_the_timeout(tmp_path, capfd, rec, kind):
+    if kind == "gap_and_late_block":
+        path = bad.write_late_block(tmp_path / "r.mcap", bad.gap(rec, 1.6, 1.0), 3.2, 1.0)  # gap starts in a flight
+    elif kind == "force_only":
+        path = bad.write(tmp_path / "r.mcap", bad.force_only(rec))
+    else:
+        path = bad.write_marker_only(tmp_path / "r.mcap", rec)
+    duration_s = (max(rec.force.stamp_ns[-1], rec.markers.stamp_ns[-1]) - rec.start_ns) * 1e-9
+    report, code, text = _run(path, tmp_path / "out", capfd)
+    assert report.finished and report.wall_s < duration_s / 2 + 10.0, report.wall_s
+    assert "Traceback" not in text
+    if kind == "force_only":
+        assert "the recording has no /mocap/markers messages" in text
+        assert len(report.summaries) >= 8 and all(s.rejection_reason == "no marker data" for s in report.summaries)
+    elif kind == "marker_only":
+        assert "the recording has no /force_plate/wrench messages" in text
+    else:
+        assert "arrived later than the reorder window" in text
+
+
+def test_truncated_recording_runs_to_the_break(tmp_path, capfd):
+    path = bad.truncated(tmp_path / "half.mcap", bad.BUNDLED, 0.5)
+    report, code, text = _run(path, tmp_path / "out", capfd)
+    assert "truncated or corrupt" in text and "replayed up to there" in text
+    assert sum(not s.rejection_reason for s in report.summaries) >= 3
+    assert code == 0 and "Traceback" not in text
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except OSError:
+        return []
+
+
+def _cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+    except OSError:
+        return ""
+
+
+def test_killed_node_is_named_and_the_recorder_file_stays_readable(tmp_path):
+    """kill -9 of the recorder under --processes: one line naming it, finished stances printed, exit 1."""
+    out = tmp_path / "out"
+    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    proc = subprocess.Popen([sys.executable, "-m", "hop_impedance.cli", "pipeline", "--recording", str(bad.BUNDLED),
+                             "--out", str(out), "--processes", "--rate", "1", "--timeout", "90"],
+                            cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    victim = None
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and victim is None:
+        replay = [c for c in _children(proc.pid) if "hop_impedance.nodes.replay" in _cmdline(c)]
+        if replay:
+            time.sleep(3.0)  # a few stances into the recording at real time
+            victim = next(c for c in _children(proc.pid) if "hop_impedance.nodes.recorder" in _cmdline(c))
+            os.kill(victim, signal.SIGKILL)
+        time.sleep(0.1)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert victim is not None
+    assert proc.returncode == 1
+    assert "Traceback" not in stderr + stdout
+    assert "error: node recorder was killed by signal 9 (SIGKILL)" in stderr
+    assert "stances finished (table above)" in stderr
+    written = list(MessageStream(out / "pipeline.mcap", topics=[STANCE_KINETICS_TOPIC, "/force_plate/wrench"]))
+    assert sum(m.topic == "/force_plate/wrench" for m in written) > 1000  # the copied inputs were flushed at once
+
+
+def test_sigint_on_looped_replay_is_one_line(tmp_path):
+    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    proc = subprocess.Popen([sys.executable, "-m", "hop_impedance.cli", "replay", str(bad.BUNDLED), "--loop", "--wait", "0"],
+                            cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=30)
+    assert proc.returncode == 130
+    assert "Traceback" not in stderr and "context is invalid" not in stderr
+    assert "hop-impedance replay: interrupted" in stderr
+    assert "/force_plate/wrench:" in stdout
