@@ -27,13 +27,16 @@ from pathlib import Path
 
 import numpy as np
 
+from hop_impedance.impedance.regression_model import TERM_NAMES
 from hop_impedance.impedance.report import JOINTS, _write_csv, write_figures
+from hop_impedance.impedance.stance_fit import JointImpedanceFit
 from hop_impedance.impedance.statistics import (
     TABLE2_QUANTITIES,
     StanceFitRecord,
     markdown_table,
-    mean_sd,
     quantity,
+    table2,
+    table3,
     wilcoxon_between_conditions,
     wilcoxon_variable_vs_constant,
 )
@@ -86,29 +89,20 @@ def table1(rows: list[dict], conditions: list[str]) -> list[list[str]]:
     return out
 
 
-def table2(records: list[StanceFitRecord], conditions: list[str]) -> list[list[str]]:
-    """Rows ``[joint, quantity, mean (SD) over subjects per condition...]`` (seed Table 2 layout)."""
+def subject_records(records: list[StanceFitRecord]) -> list[StanceFitRecord]:
+    """One record per (condition, subject, joint) whose fit holds that subject's mean over its stances of
+    every Table 2/3 quantity, so :func:`statistics.table2`/:func:`statistics.table3` give mean (SD) over subjects."""
+    groups: dict[tuple[str, str, str], list] = {}
+    for r in records:
+        groups.setdefault((r.condition, r.subject_id, r.joint), []).append(r.fit)
     out = []
-    for joint in JOINTS:
-        for label, name in TABLE2_QUANTITIES:
-            row = [joint, label]
-            for c in conditions:
-                sel = [(r.subject_id, quantity(r.fit, name)) for r in records if r.joint == joint and r.condition == c]
-                row.append(mean_sd(subject_means(sel)))
-            out.append(row)
-    return out
-
-
-def table3(records: list[StanceFitRecord], conditions: list[str]) -> list[list[str]]:
-    """Rows ``[condition, model, ankle, knee, hip]`` of the Table 3 error, mean (SD) over subjects."""
-    out = []
-    for c in conditions:
-        for model, name in (("variable stiffness", "table3_variable"), ("constant stiffness", "table3_constant")):
-            row = [c, model]
-            for joint in JOINTS:
-                sel = [(r.subject_id, getattr(r.fit, name)) for r in records if r.joint == joint and r.condition == c]
-                row.append(mean_sd(subject_means(sel)))
-            out.append(row)
+    for (condition, subject, joint), fits in groups.items():
+        means = {name: (subject_means((subject, quantity(f, name)) for f in fits) or [math.nan])[0]
+                 for name in [n for _, n in TABLE2_QUANTITIES] + ["table3_variable", "table3_constant"]}
+        fit = JointImpedanceFit(status="solved", rejection_reason=None,
+                                coefficients={n: v for n, v in means.items() if n in TERM_NAMES},
+                                **{n: v for n, v in means.items() if n not in TERM_NAMES})
+        out.append(StanceFitRecord(condition, subject, joint, fit))
     return out
 
 
@@ -149,7 +143,8 @@ def write_population_report(rows: list[dict], records: list[StanceFitRecord], ou
     h1, h2, h3 = ["quantity", "joint"] + conditions, ["joint", "quantity"] + conditions, ["condition", "model", *JOINTS]
     ht = ["conditions", "joint", "quantity", "paired by", "pairs", "p"]
     hc = ["condition", "joint", "subjects", "recordings", "usable fits"]
-    t1, t2, t3 = table1(rows, conditions), table2(records, conditions), table3(records, conditions)
+    per_subject = subject_records(records)
+    t1, t2, t3 = table1(rows, conditions), table2(per_subject, conditions), table3(per_subject, conditions)
     tests, n = paired_tests(records, conditions), counts(rows, records, conditions)
     paths = [out_dir / f for f in ("table1.csv", "table2.csv", "table3.csv", "tests.csv", "counts.csv")]
     for path, header, body in zip(paths, (h1, h2, h3, ht, hc), (t1, t2, t3, tests, n)):
@@ -168,5 +163,5 @@ def write_population_report(rows: list[dict], records: list[StanceFitRecord], ou
     return paths + [md] + write_figures(records, conditions, out_dir)
 
 
-__all__ = ["TABLE1_QUANTITIES", "condition_order", "counts", "paired_tests", "subject_means", "table1", "table2",
-           "table3", "write_population_report"]
+__all__ = ["TABLE1_QUANTITIES", "condition_order", "counts", "paired_tests", "subject_means", "subject_records",
+           "table1", "write_population_report"]
