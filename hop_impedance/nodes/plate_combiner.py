@@ -90,7 +90,8 @@ class PlateCombinerNode(Node):
         jitter = declare(self, "jitter_s", 0.0002, "per-sample stamp tolerance after the skew is locked (s)")
         wait = declare(self, "missing_after_s", 0.5, "drop an instant a plate lacks once the others run this far ahead (s)")
         self.output_topic = declare(self, "output_topic", FORCE_TOPIC, "combined wrench topic")
-        self.end_timeout_s = declare(self, "end_timeout_s", 3.0, "after end-of-stream, wait this long (s) for missing data")
+        self.end_timeout_s = declare(self, "end_timeout_s", 1.0, "after end-of-stream, wait this long (s) for missing data; "
+                                     "shorter than the consumers' (3 s) so the last samples reach them first")
         if len(origin) != 3:
             raise ValueError(f"plate_combiner: origin_m needs 3 values, got {len(origin)}")
         self.layouts = plate_layouts(topics, names, origins, yaws)
@@ -148,14 +149,18 @@ class PlateCombinerNode(Node):
         self.published += len(stamps)
 
     def _on_end(self, msg: Header) -> None:
-        """End of a replayed stream: flush once every plate has data up to its stamp (or after ``end_timeout_s``)."""
+        """End of a replayed stream: flush once every plate has data up to its stamp (or after ``end_timeout_s``).
+
+        The end stamp is the newest of every played topic, so a plate stamped
+        earlier by its skew counts as complete within ``max_skew_s`` of it.
+        """
         self._end = (stamp_ns(msg.stamp), time.monotonic() + self.end_timeout_s)
 
     def _check_end(self) -> None:
         if self._end is None or self._finished:
             return
         end_ns, deadline = self._end
-        if all((t.newest_ns or 0) >= end_ns for t in self.trackers) or time.monotonic() > deadline:
+        if all((t.newest_ns or 0) + self.stage.max_skew_ns >= end_ns for t in self.trackers) or time.monotonic() > deadline:
             self.process(everything=True)
             self._finished = True
             self.diagnostics.publish()

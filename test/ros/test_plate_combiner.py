@@ -133,7 +133,7 @@ def test_a_plate_that_stops_is_reported_on_diagnostics(tmp_path):
     rec = load_recording(RECORDING)
     mcap = tmp_path / "right_stops.mcap"
     _write_two_plates(mcap, split_two_plates(rec.force), right_until=700, n=1500)
-    wrenches, status = _run(mcap, 700, tmp_path, timeout_s=30.0, settle_s=4.5)  # end_timeout_s 3 s: the right plate never reaches the end
+    wrenches, status = _run(mcap, 700, tmp_path, timeout_s=30.0, settle_s=2.5)  # end_timeout_s 1 s: the right plate never reaches the end
     assert len(wrenches) == 700, _values(status)  # nothing after the right plate stopped: no half-weight wrench
     final = status[-1]
     assert final.level == bytes([2]) and "right" in final.message, final.message
