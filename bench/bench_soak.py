@@ -68,7 +68,9 @@ def main() -> int:
     ap.add_argument("--baseline-min", type=float, default=2.0, help="growth is measured from this minute [2]")
     ap.add_argument("--csv", help="write every sample (t_s, node, rss_mb, cpu_s) here")
     args = ap.parse_args()
+    # loopback only, and a domain of its own so other pipelines on this machine do not cross-talk
     env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    env.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     total_s = args.minutes * 60.0
     cmd = [sys.executable, "-m", "hop_impedance.cli", "pipeline", "--recording", args.recording, "--out", args.out,
            "--processes", "--loop", "--rate", "1", "--timeout", str(total_s + 120), "--tolerate-loss"]

@@ -32,6 +32,9 @@ consumers : list of str
     stall the replay.
 max_ahead_s : float
     Recording time the replay may run ahead of the slowest consumer (s).
+drop_fraction, drop_seed : float, int
+    Tests of loss: leave out this fraction of the sensor messages, chosen by a
+    seeded generator (reproducible, unlike loss from CPU starvation).
 
 At the end the replay waits until every message is acknowledged and then
 publishes a ``std_msgs/Header`` on ``/replay/end_of_stream`` (reliable,
@@ -93,6 +96,14 @@ class ReplayNode(Node):
         self.declare_parameter("consumers", [""], _desc("nodes whose /pipeline/progress paces a rate-0 replay"))
         self.declare_parameter("max_ahead_s", 0.5, _desc("rate 0 with consumers: run at most this far (recording s) ahead"))
         self.declare_parameter("consumer_timeout_s", 2.0, _desc("leave out a consumer silent for this long (s)"))
+        self.declare_parameter("drop_fraction", 0.0, _desc("tests: leave out this fraction of sensor messages (seeded loss)"))
+        self.declare_parameter("drop_seed", 0, _desc("tests: seed of the messages left out"))
+        self.drop_fraction = float(self.get_parameter("drop_fraction").value)
+        self._drop_rng = None
+        if self.drop_fraction > 0:
+            import numpy as np
+
+            self._drop_rng = np.random.default_rng(int(self.get_parameter("drop_seed").value))
         self.consumers = [c for c in self.get_parameter("consumers").value if c]
         self.max_ahead_ns = int(float(self.get_parameter("max_ahead_s").value) * 1e9)
         self.consumer_timeout_s = float(self.get_parameter("consumer_timeout_s").value)
@@ -115,6 +126,7 @@ class ReplayNode(Node):
         self.topics = list(self.get_parameter("topics").value)
         self.reliable = bool(self.get_parameter("reliable").value)
         self.published = {t: 0 for t in self.topics}
+        self.dropped = {t: 0 for t in self.topics}
         #: Where reading a damaged file stopped (one line per pass), shown by the CLI.
         self.stops: list[str] = []
         self._published_stamps: dict[str, list[int]] = {}  # topic -> increasing stamps published (ns), recent
@@ -202,6 +214,9 @@ class ReplayNode(Node):
                 self.last_stamp_ns = max(self.last_stamp_ns, stamp)
                 if self.rate == 0 and self.consumers:
                     self._wait_for_consumers()
+            if topic != SUBJECT_TOPIC and self._drop_rng is not None and self._drop_rng.random() < self.drop_fraction:
+                self.dropped[topic] += 1  # injected loss (tests): the message is in the file but never sent
+                continue
             pub.publish(payload)
             if topic != SUBJECT_TOPIC:
                 self._note_published(topic, stamp)

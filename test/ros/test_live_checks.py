@@ -164,3 +164,27 @@ def test_sigint_on_looped_replay_is_one_line(tmp_path):
     assert "Traceback" not in stderr and "context is invalid" not in stderr
     assert "hop-impedance replay: interrupted" in stderr
     assert "/force_plate/wrench:" in stdout
+
+
+def test_seeded_loss_is_counted_every_stance_has_a_row_and_exit_is_nonzero(tmp_path, capfd):
+    """1 % of the sensor messages left out by the replay (seeded): counted exactly, rows kept, exit 1."""
+    import numpy as np
+
+    from hop_impedance.io.mcap_io import summarize
+    from hop_impedance.nodes.runner import messages_lost
+
+    cfg = dict(overrides={"replay": {"drop_fraction": 0.01, "drop_seed": 7}})
+    report, code, text = _run(bad.BUNDLED, tmp_path / "out", capfd, **cfg)
+    topics = [m.topic for m in MessageStream(bad.BUNDLED, decode=False) if m.topic != "/subject"]
+    dropped = np.random.default_rng(7).random(len(topics)) < 0.01
+    d_force = sum(d and t == "/force_plate/wrench" for d, t in zip(dropped, topics))
+    d_markers = int(dropped.sum()) - d_force
+    counts = {i.topic: i.count for i in summarize(bad.BUNDLED)}
+    assert messages_lost(report, counts) == 2 * d_force + d_markers > 0  # both consumers miss the same force samples
+    assert code == 1 and "input messages lost on the way" in text and "--tolerate-loss" in text
+    assert print_report(report, str(bad.BUNDLED), tolerate_loss=True) == 0
+    rows = _recorded(report, STANCE_KINETICS_TOPIC)
+    assert len(rows) == len(report.summaries) == 10  # every stance the detector saw has a row
+    assert any("message loss" in r.rejection_reason for r in rows)
+    contact = [r.contact_time_s for r in rows]
+    assert max(contact) < 0.25  # no two stances merged (0.21 s each)
