@@ -34,8 +34,8 @@ The rules (``CheckFailure.rule``), each decided the same way on both paths:
     At least :data:`MM_MIN_FRAMES` frames, and more than half the frames seen,
     have a median absolute coordinate above 20 (m): millimetres.
 ``rates``
-    The nominal rate of a stream (median of its first
-    :data:`RATE_STEPS` positive stamp steps) must exceed twice the low-pass
+    The nominal rate of a stream (median of its first 50 positive stamp steps,
+    ``stages.NominalPeriod`` as the streaming stage uses) must exceed twice the low-pass
     cut-off, or no stance can be filtered (``--cutoff-hz 50`` on 100 Hz markers).
 
 Duplicates and order are not failures: both paths sort by ``header.stamp``
@@ -62,8 +62,6 @@ UNITS_MAX_BW = 40.0
 #: Frames that must look like millimetres (and more than half of those seen).
 MM_MIN_FRAMES = 10
 MM_MEDIAN_LIMIT = 20.0
-#: Stamp steps that give a stream's nominal rate (as stages.NominalPeriod).
-RATE_STEPS = 50
 MASS_RANGE_KG = (10.0, 300.0)
 HEIGHT_RANGE_M = (0.5, 2.6)
 
@@ -135,26 +133,26 @@ def order_by_stamp(stamps: np.ndarray, label: str, warnings: list[str]) -> np.nd
 
 
 class _Rate:
-    """Nominal rate of a stream from its first :data:`RATE_STEPS` positive steps."""
+    """Nominal rate of a stream: :class:`hop_impedance.biomech.stages.NominalPeriod` on stamps in ns."""
 
     def __init__(self) -> None:
-        self.steps: list[int] = []
-        self.last: int | None = None
-        self.hz: float | None = None
+        from hop_impedance.biomech.stages import NominalPeriod
+
+        self.period = NominalPeriod()
+        self.t0: int | None = None
+
+    @property
+    def hz(self) -> float | None:
+        return None if self.period.value is None else 1.0 / self.period.value
 
     def add(self, stamps_ns: np.ndarray) -> bool:
         """Take stamps (ns, in arrival order); True when the rate became known now."""
-        if self.hz is not None or len(stamps_ns) == 0:
+        if self.period.value is not None or len(stamps_ns) == 0:
             return False
         s = np.asarray(stamps_ns, np.int64)
-        t = s if self.last is None else np.concatenate([[self.last], s])
-        d = np.diff(t)
-        self.steps.extend(int(v) for v in d[d > 0][: RATE_STEPS - len(self.steps)])
-        self.last = int(s[-1])
-        if len(self.steps) >= RATE_STEPS:
-            self.hz = 1e9 / float(np.median(self.steps))
-            return True
-        return False
+        self.t0 = int(s[0]) if self.t0 is None else self.t0
+        self.period.update((s - self.t0) * 1e-9)
+        return self.period.value is not None
 
 
 class InputChecks:
