@@ -101,6 +101,9 @@ def print_report(report, recording: str, tolerate_loss: bool = False) -> int:
         late = sum(int(report.diag(node, k, "0") or 0) for k in ("force_late_dropped", "markers_late_dropped"))
         if late:
             problem(f"warning: {node}: {late} input messages arrived later than the reorder window and were not used")
+    dups = sum(int(report.diag("/inverse_dynamics", k, "0") or 0) for k in ("force_duplicates_dropped", "markers_duplicates_dropped"))
+    if dups:
+        problem(f"warning: /inverse_dynamics: {dups} input messages with a repeated header.stamp dropped")
     code = 0
     for note in input_notes(report):
         problem(note)

@@ -73,6 +73,7 @@ def test_live_rows_match_analyze_and_duplicates_kill_nothing(tmp_path, capfd, re
     offline = {r["touchdown_stamp_ns"]: r["rejection_reason"] for r in json.loads((tmp_path / "a.json").read_text())["stances"]}
     report, code, text = _run(path, tmp_path / "out", capfd)
     assert code == 0 and report.finished and "Traceback" not in text
+    assert "input messages with a repeated header.stamp dropped" in text  # the duplicates, on the terminal
     live = {stamp_ns(m.touchdown_stamp): (m.rejection_reason or None) for m in _recorded(report, STANCE_KINETICS_TOPIC)}
     assert len(live) == len(offline) >= 8
     for td, reason in live.items():
