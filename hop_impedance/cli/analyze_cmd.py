@@ -30,6 +30,9 @@ def register(subparsers) -> None:
     p.add_argument("--detector", action="append", metavar="NAME=VALUE",
                    help="stance detection setting (repeatable), e.g. takeoff_n=15; names and defaults: "
                         "DetectorOptions in biomech/stance_detection.py, the same as the nodes' parameters")
+    p.add_argument("--model-terms", metavar="T1,T2,...",
+                   help="fit this structure to every stance and joint (e.g. k0,k1,b0) instead of choosing one per joint "
+                        "for the recording from the per-stance F-tests")
     p.add_argument("--no-fit", action="store_true", help="skip the per-stance impedance fits (no 'fit' objects)")
     p.add_argument("--report", metavar="DIR",
                    help="write Table 2/3 layouts (CSV, Markdown, Wilcoxon tests) and PNG figures of the fits; "
@@ -58,8 +61,14 @@ def _subject(rec, args, path):
     return replace(subj, **changes) if changes else subj
 
 
-def add_fits_to_json(doc: dict, analysis) -> list[dict]:
+def add_fits_to_json(doc: dict, analysis, model_terms: list[str] | None = None) -> list[dict]:
     """Fit every stance of ``analysis`` and put each joint's ``fit`` object into ``doc``.
+
+    One model structure per joint for the recording (``recording_fits``, "One
+    model per trial"): ``doc["model_structure"][joint]`` says which terms and
+    why, each ``fit`` uses them, and ``stance_model`` next to it keeps that
+    stance's own reduction (terms and p-values of its F-tests).
+    ``model_terms`` fixes the structure for every joint instead.
 
     Parameters
     ----------
@@ -68,22 +77,29 @@ def add_fits_to_json(doc: dict, analysis) -> list[dict]:
         for stances with joint data (rejected stances have ``joints: null``
         and no fit; their reason is the stance's ``rejection_reason``).
     analysis : RecordingAnalysis
+    model_terms : list of str, optional
 
     Returns
     -------
     list of dict
         The fits, one ``{joint: JointImpedanceFit}`` per stance.
     """
-    from hop_impedance.impedance.recording_fits import fit_recording
+    from hop_impedance.impedance.recording_fits import fit_recording_trial, given_structure
     from hop_impedance.impedance.stance_fit import fit_to_json
 
-    fits = fit_recording(analysis)
-    for stance, stance_fits in zip(doc["stances"], fits):
+    given = None
+    if model_terms:
+        structure = given_structure(model_terms, "given on the command line (--model-terms)")
+        given = {name: structure for name in ("ankle", "knee", "hip")}
+    trial = fit_recording_trial(analysis, structures=given)
+    doc["model_structure"] = {name: s.to_json() for name, s in trial.structures.items()}
+    for stance, stance_fits, own in zip(doc["stances"], trial.fits, trial.stance_fits):
         if stance["joints"] is None:
             continue
         for name, fit in stance_fits.items():
             stance["joints"][name]["fit"] = fit_to_json(fit)
-    return fits
+            stance["joints"][name]["stance_model"] = {"terms": list(own[name].terms), "p_values": fit_to_json(own[name])["p_values"]}
+    return trial.fits
 
 
 def condition_label(analysis, path: str, taken: list[str]) -> str:
@@ -143,7 +159,7 @@ def run(args: argparse.Namespace) -> int:
             analysis = analyze_recording(rec, options)
             doc = analysis_to_json(analysis)
             if not args.no_fit:
-                fits = add_fits_to_json(doc, analysis)
+                fits = add_fits_to_json(doc, analysis, args.model_terms.split(",") if args.model_terms else None)
                 label = condition_label(analysis, path, conditions)
                 conditions.append(label)
                 records += fit_records(fits, label, analysis.subject.subject_id)

@@ -24,8 +24,9 @@ A stance rejected by an input check turns this node's ``/diagnostics`` to
 ERROR with the rule's reason.
 
 Model structure (one per joint for the session, ``recording_fits``, "One
-model per trial"): ``model_terms`` (default the seed's reduced model k0, k1,
-b0) is fitted to every stance; with ``model_warmup_stances`` N > 0 the
+model per trial"): ``model_terms_ankle``, ``model_terms_knee``,
+``model_terms_hip`` (default the seed's reduced model k0, k1, b0) are fitted
+to every stance; with ``model_warmup_stances`` N > 0 the
 structure is instead chosen by the offline rule over the first N stances
 (fitted with the seed's k0, k1, b0 meanwhile) and kept from then on. The
 profiles' ``terms`` carry it and ``/diagnostics`` says which and why
@@ -38,6 +39,7 @@ force sample at or after take-off at ``inverse_dynamics``
 
 from __future__ import annotations
 
+import collections
 import math
 import time
 
@@ -55,7 +57,7 @@ from hop_impedance.nodes.common import (
     set_stamp, stamp_ns,
 )
 from hop_impedance.nodes.inverse_dynamics import stance_from_message
-from hop_impedance.nodes.qos import latched_qos, result_qos
+from hop_impedance.nodes.qos import STANCE_HISTORY, history_qos, latched_qos, result_qos
 from hop_impedance.recording import GRAVITY_M_S2
 from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, StanceSummary
 
@@ -82,8 +84,9 @@ class ImpedanceEstimatorNode(Node):
         self.input_failure = ""
         self.last_invalid = ""
         warmup = declare(self, "model_warmup_stances", 0, "choose the model structure over the first N stances (0 = model_terms)")
-        terms = declare(self, "model_terms", list(SEED_TERMS), "model structure fitted to every stance when model_warmup_stances is 0")
-        self.selector = StructureSelector(self.options, None if warmup > 0 else list(terms), max(warmup, 1))
+        terms = {j: declare(self, f"model_terms_{j}", list(SEED_TERMS), f"{j}: model structure fitted to every stance "
+                            "when model_warmup_stances is 0") for j in JOINT_NAMES}
+        self.selector = StructureSelector(self.options, None if warmup > 0 else terms, max(warmup, 1))
         self.fit_s: list[float] = []
         self.latency_s: list[float] = []
         self.stances_in = 0
@@ -94,10 +97,16 @@ class ImpedanceEstimatorNode(Node):
         self.pub_summary = self.create_publisher(StanceSummary, SUMMARY_TOPIC, result_qos())
         self.pub_feed = self.create_publisher(ControllerImpedance, CONTROLLER_TOPIC, latched_qos())
         self.pub_feed.publish(self.feed)  # nothing valid until a stance passed every check
-        self.create_subscription(StanceKinetics, STANCE_KINETICS_TOPIC, self._on_stance, result_qos())
+        # transient-local: started mid-session, the recent stances arrive at once (de-duplicated by touchdown stamp)
+        self.create_subscription(StanceKinetics, STANCE_KINETICS_TOPIC, self._on_stance, history_qos())
+        self.seen_touchdowns: collections.deque = collections.deque(maxlen=4 * STANCE_HISTORY)
         self.diagnostics = Diagnostics(self, diag, self._diag_values, self._diag_level)
 
     def _on_stance(self, msg: StanceKinetics) -> None:
+        touchdown_ns = stamp_ns(msg.touchdown_stamp)
+        if touchdown_ns in self.seen_touchdowns:  # heard live and again from the transient-local history
+            return
+        self.seen_touchdowns.append(touchdown_ns)
         t_start = time.perf_counter()
         self.stances_in += 1
         stance = stance_from_message(msg)

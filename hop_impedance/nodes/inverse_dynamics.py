@@ -51,7 +51,7 @@ from hop_impedance.nodes.common import (
     END_TOPIC, JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC, Diagnostics, InputTracker, ProgressReporter,
     InputGuard, ReorderBuffer, declare, declare_stream_parameters, seconds_to_ns, set_stamp, stamp_ns, wrench_from_cdr,
 )
-from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
+from hop_impedance.nodes.qos import history_qos, input_qos, latched_qos, result_qos
 from hop_impedance.nodes.stance_detector import declare_detector_options
 from hop_impedance.recording import FORCE_TOPIC, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, MarkerSeries, Subject
 from hop_impedance_msgs.msg import JointKinetics, MarkerArray, StanceKinetics, SubjectInfo
@@ -94,7 +94,7 @@ class InverseDynamicsNode(Node):
         self.lost_between_stances = 0
         self.lost_after_last = 0
         self.analysis_s: list[float] = []
-        self.pub_stance = self.create_publisher(StanceKinetics, STANCE_KINETICS_TOPIC, result_qos())
+        self.pub_stance = self.create_publisher(StanceKinetics, STANCE_KINETICS_TOPIC, history_qos())  # late joiners
         self.pub_frames = self.create_publisher(JointKinetics, JOINT_KINETICS_TOPIC, result_qos(2000))
         self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
         self.create_subscription(WrenchStamped, FORCE_TOPIC, self._on_wrench, input_qos(reliable), raw=True)

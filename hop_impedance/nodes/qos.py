@@ -10,6 +10,11 @@
   transient-local for the controller feed so a controller that starts late
   gets the latest impedance at once.
 - ``/subject``: reliable + transient-local, published once (contract).
+- ``/stance/kinetics``: reliable + transient-local with the last
+  :data:`STANCE_HISTORY` stances (:func:`history_qos`), so an estimator or a
+  controller's own fitter started mid-session gets the recent stances at once;
+  subscribers de-duplicate by touchdown stamp (a stance heard live and again
+  from the history is fitted once).
 """
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -37,6 +42,20 @@ def latched_qos() -> QoSProfile:
     return QoSProfile(
         history=HistoryPolicy.KEEP_LAST,
         depth=1,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    )
+
+
+#: Stances kept on ``/stance/kinetics`` for late joiners (about 10 s of hopping at 2 Hz).
+STANCE_HISTORY = 20
+
+
+def history_qos(depth: int = STANCE_HISTORY) -> QoSProfile:
+    """Reliable, transient-local, the last ``depth`` messages: per-stance results a late joiner needs."""
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
         reliability=ReliabilityPolicy.RELIABLE,
         durability=DurabilityPolicy.TRANSIENT_LOCAL,
     )

@@ -41,7 +41,11 @@ def _offline_fit(stance: dict, joint: str) -> dict:
 
 def test_separate_processes_match_offline_analyze(tmp_path, offline):
     assert os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
-    report = run_pipeline(PipelineConfig(REC, str(tmp_path), rate=0.0, processes=True, timeout_s=90))
+    # one model per trial: offline analyze chose each joint's structure over the recording; the live estimator
+    # is given the same (its model_terms_<joint> parameters; default the seed's k0, k1, b0)
+    given = {f"model_terms_{j}": offline["model_structure"][j]["terms"] for j in JOINTS}
+    report = run_pipeline(PipelineConfig(REC, str(tmp_path), rate=0.0, processes=True, timeout_s=90,
+                                         overrides={"impedance_estimator": given}))
     assert report.finished
     complete = [s for s in offline["stances"] if s["complete"]]
     # exactly one summary (profile or rejection) per complete stance, three profiles each
