@@ -3,9 +3,10 @@
 :func:`analyze_item` is a plain function of (item, options): the serial path
 calls it in the command's process, Dask workers call it remotely; nothing here
 imports Dask. It runs the steps of ``hop-impedance analyze REC --json OUT``
-with the same functions (``_subject``, ``analysis_to_json``,
-``add_fits_to_json``, ``json.dumps(..., allow_nan=False)``), so the JSON text is
-the same byte for byte, and returns it with the tidy stance x joint rows and
+with the same functions (``load_recording``, ``_subject``, ``check_recording``,
+``analyze_recording``, ``analysis_to_json``, ``add_fits_to_json``,
+``json.dumps(..., allow_nan=False)``), so the JSON text is the same byte for
+byte (test/batch checks it against the command), and returns it with the tidy stance x joint rows and
 the usable fits (for the population tables and figures).
 
 Numerical thread settings: every task runs with one BLAS/OpenMP thread
@@ -66,22 +67,27 @@ class BatchOptions:
         Per-segment overrides (``analyze --segments``), already read.
     indent : int or None
         JSON indent, as ``analyze --indent``.
+    detector : tuple of str
+        ``NAME=VALUE`` stance detection settings, as ``analyze --detector``.
     """
 
     cutoff_hz: float = 12.0
     max_gap_s: float = 0.05
     segments: dict | None = field(default=None, compare=False, hash=False)
     indent: int | None = None
+    detector: tuple[str, ...] = ()
 
     def analysis_options(self):
         """The :class:`AnalysisOptions` ``analyze`` builds from the same flags."""
         from hop_impedance.biomech.analysis import AnalysisOptions
+        from hop_impedance.biomech.stance_detection import DetectorOptions
 
         return AnalysisOptions(
             marker_cutoff_hz=self.cutoff_hz,
             force_cutoff_hz=self.cutoff_hz,
             max_gap_s=self.max_gap_s,
             overrides=self.segments,
+            detector=DetectorOptions.from_settings(list(self.detector) or None),
         )
 
 
@@ -244,11 +250,16 @@ def _analyze(item, options: BatchOptions) -> Outcome:
     from hop_impedance import __version__
     from hop_impedance.biomech.analysis import analysis_to_json, analyze_recording
     from hop_impedance.cli.analyze_cmd import _subject, add_fits_to_json, condition_label
-    from hop_impedance.io.recording_io import load_recording
+    from hop_impedance.input_checks import InputChecks
+    from hop_impedance.io.recording_io import check_recording, load_recording
 
     rec = load_recording(item.path)
     flags = SimpleNamespace(mass_kg=item.mass_kg, height_m=item.height_m, sex=item.sex)
     rec = replace(rec, subject=_subject(rec, flags, item.path))
+    # analyze's contract checks with the subject in use and the cut-off: a recording analyze refuses fails here too
+    checks = InputChecks(cutoff_hz=options.cutoff_hz)
+    checks.set_subject(rec.subject)
+    check_recording(checks, rec.force, rec.markers)
     analysis = analyze_recording(rec, options.analysis_options())
     doc = analysis_to_json(analysis)
     fits = add_fits_to_json(doc, analysis)

@@ -38,6 +38,8 @@ def register(subparsers) -> None:
     p.add_argument("--max-gap-s", type=float, default=0.05, help="as analyze: longest marker gap filled (s)")
     p.add_argument("--segments", metavar="YAML", help="as analyze: per-segment overrides of the body model")
     p.add_argument("--indent", type=int, default=None, help="as analyze: pretty-print the JSON with this indent")
+    p.add_argument("--detector", action="append", metavar="NAME=VALUE",
+                   help="as analyze: stance detection setting (repeatable), e.g. takeoff_n=15")
     p.set_defaults(func=run)
 
 
@@ -53,6 +55,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.workers is not None and args.workers < 1:
         raise ValueError("--workers must be at least 1")
+    if not args.cutoff_hz > 0:
+        raise ValueError(f"--cutoff-hz must be > 0, got {args.cutoff_hz}")
+    if not args.max_gap_s >= 0:
+        raise ValueError(f"--max-gap-s must be >= 0, got {args.max_gap_s}")
     items = collect_items(args.inputs)
     if args.scheduler:  # remote workers do not share this process's working directory
         from dataclasses import replace
@@ -63,7 +69,9 @@ def run(args: argparse.Namespace) -> int:
         max_gap_s=args.max_gap_s,
         segments=load_overrides(args.segments) if args.segments else None,
         indent=args.indent,
+        detector=tuple(args.detector or ()),
     )
+    options.analysis_options()  # a bad --detector setting is a one-line error now, not one failure per recording
     mode = "serial" if args.serial else args.scheduler or "local"
     summary = run_batch(items, args.out, options, mode=mode, workers=args.workers, group_by=args.group_by,
                         force=args.force)
