@@ -24,6 +24,10 @@ def run(args: argparse.Namespace) -> int:
     import rclpy
     from rclpy.parameter import Parameter
 
+    from hop_impedance.io.mcap_io import MessageStream
+
+    MessageStream(args.recording)  # an empty / non-MCAP / missing file: one line before ROS starts
+
     from hop_impedance.nodes.replay import ReplayNode
 
     params = [
