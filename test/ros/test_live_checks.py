@@ -189,3 +189,13 @@ def test_seeded_loss_is_counted_every_stance_has_a_row_and_exit_is_nonzero(tmp_p
     assert any("message loss" in r.rejection_reason for r in rows)
     contact = [r.contact_time_s for r in rows]
     assert max(contact) < 0.25  # no two stances merged (0.21 s each)
+
+
+def test_missing_subject_takes_the_parameters_after_the_wait(tmp_path, capfd, rec):
+    path = bad.write(tmp_path / "nosub.mcap", bad.no_subject(rec))
+    params = {"inverse_dynamics": {"body_mass_kg": 54.8, "body_height_m": 1.63}}
+    report, code, text = _run(path, tmp_path / "out", capfd, overrides=params)
+    assert code == 0 and "Traceback" not in text
+    assert "note: /inverse_dynamics: no /subject within 2 s: using body_mass 54.8 kg, body_height 1.63 m from parameters" in text
+    assert sum(not s.rejection_reason for s in report.summaries) >= 8
+    assert any(any(f.valid) for f in _recorded(report, CONTROLLER_TOPIC))
