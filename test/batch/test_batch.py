@@ -219,3 +219,19 @@ def test_cli_on_an_existing_scheduler(serial, inputs, client, tmp_path, capsys):
     assert "7 recordings: 5 analysed, 0 up to date (skipped), 2 failed" in err and "on 2 worker(s)" in err
     a, b = _tree(out), _tree(tmp_path)
     assert sorted(a) == sorted(b) and [k for k in a if a[k] != b[k]] == []
+
+
+def _blas_threads_in_a_task() -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    from hop_impedance.batch.task import one_blas_thread
+
+    with one_blas_thread():
+        return sorted({lib["num_threads"] for lib in threadpool_info()})
+
+
+def test_one_blas_thread_serial_and_on_workers(client):
+    """The numerical thread setting every task runs with, here and on each worker process."""
+    here = _blas_threads_in_a_task()
+    there = client.run(_blas_threads_in_a_task)
+    assert here == [1] and len(there) == 2 and all(v == [1] for v in there.values())
