@@ -40,6 +40,10 @@ from hop_impedance.batch.inputs import BatchItem
 from hop_impedance.batch.task import BatchOptions, Outcome, analyze_item, cache_key, file_sha256
 
 
+#: ``--group-by`` keys besides the manifest's extra columns.
+GROUP_KEYS: tuple[str, ...] = ("condition", "frequency", "subject", "recording")
+
+
 @dataclass
 class BatchSummary:
     """What a run did.
@@ -241,6 +245,10 @@ def run_batch(
     from hop_impedance import __version__
 
     options = options or BatchOptions()
+    labels = {k for i in items for k, _ in i.labels}
+    if group_by is not None and group_by not in GROUP_KEYS and group_by not in labels:
+        raise ValueError(f"--group-by {group_by!r}: expected one of {', '.join(GROUP_KEYS)} or a manifest column"
+                         + (f" ({', '.join(sorted(labels))})" if labels else ""))
     out = Path(out_dir)
     (out / "json").mkdir(parents=True, exist_ok=True)
     (out / ".batch").mkdir(exist_ok=True)
