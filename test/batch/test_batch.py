@@ -235,3 +235,39 @@ def test_one_blas_thread_serial_and_on_workers(client):
     here = _blas_threads_in_a_task()
     there = client.run(_blas_threads_in_a_task)
     assert here == [1] and len(there) == 2 and all(v == [1] for v in there.values())
+
+
+FOREIGN = Path(__file__).resolve().parents[3] / "shared" / "foreign"
+
+
+@pytest.mark.skipif(not FOREIGN.is_dir(), reason="../shared/foreign not present")
+def test_foreign_recordings_tidy_table_matches_their_json(tmp_path):
+    """Recordings from the outside generator: every tidy row carries the numbers of its JSON fit object."""
+    import json
+    import math
+
+    import pyarrow.parquet as pq
+
+    names = ["none_1101", "angle_dependent_stiffness_1201", "force_plate_offset_1801"]
+    summary = run_batch(collect_items([str(FOREIGN / f"{n}.mcap") for n in names]), tmp_path, mode="serial",
+                        progress_stream=io.StringIO())
+    assert (summary.analysed, summary.failed) == (3, 0)
+    rows = {(r["recording"], r["stance"], r["joint"]): r for r in pq.read_table(tmp_path / "tidy.parquet").to_pylist()}
+    checked = 0
+    for n in names:
+        doc = json.loads((tmp_path / "json" / f"{n}.json").read_text())
+        for stance in doc["stances"]:
+            for joint in ("ankle", "knee", "hip"):
+                row = rows.pop((n, stance["index"], joint))
+                fit = (stance["joints"] or {}).get(joint, {}).get("fit")
+                if fit is None:
+                    assert row["status"] is None
+                    continue
+                assert row["status"] == fit["status"] and row["terms"] == " ".join(fit["terms"])
+                for key, prefix in (("coefficients", "coef_"), ("std_errors", "se_"), ("p_values", "p_")):
+                    for term, value in fit[key].items():
+                        assert row[prefix + term] == value or (value is None and math.isnan(row[prefix + term]))
+                for key in ("rmse", "r_squared", "sse_variable", "sse_constant", "overall_stiffness", "average_stiffness"):
+                    assert row[key] == fit[key] or (fit[key] is None and math.isnan(row[key]))
+                checked += 1
+    assert rows == {} and checked >= 3 * 20
