@@ -2,6 +2,15 @@
 
 Runs the node graph in one process (EventsExecutor) on a bundled recording:
 
+0. the controller's latency (issue 15): at real-time replay (1 kHz force, 100 Hz markers), one
+   process and ``--processes``, batch and low-latency mode, for every stance including the first:
+   from the instant the first force sample at or after the stance's true take-off (the offline
+   ``analyze`` take-off) reaches a listener in this process to the arrival there of the
+   ``/impedance/controller`` message for that stance (both ends seen by the same listener, so the
+   DDS delivery to it is on both sides; replay publishes that sample at most a fraction of a
+   millisecond before), p50 / p99 / max; the share of controller messages that arrive before the
+   first force sample of the next stance (its offline touchdown); the estimator's fit time of
+   three joints (p50 / p99, its /diagnostics); the load average (1 min) before each run;
 1. real time (rate 1, 1 kHz force + 100 Hz markers), batch mode, low-latency mode and low-latency
    "tight" (post_pad 10 ms, reorder window 2 ms, 1 ms processing period):
    latency from the arrival of the first force sample at/after take-off at
@@ -12,7 +21,7 @@ Runs the node graph in one process (EventsExecutor) on a bundled recording:
    with flow control (rate 0) nothing is lost by construction, its speed-up is printed too;
 3. fixed rates 5x, 10x, 20x with one process per node (``--processes``, both cores).
 
-Usage: .venv/bin/python bench/bench_pipeline.py [REC.mcap]
+Usage: .venv/bin/python bench/bench_pipeline.py [REC.mcap] [--latency-only]
 """
 
 import os
@@ -57,8 +66,109 @@ def latency_line(name: str, report, cpu: float, wall: float) -> str:
             f"CPU {100 * cpu / wall:.0f} % of one core over {wall:.1f} s")
 
 
+class Listener:
+    """Wall-clock arrival (monotonic s) of every force sample (by stamp) and controller message, in its own context."""
+
+    def __init__(self) -> None:
+        import threading
+
+        import rclpy
+        from geometry_msgs.msg import WrenchStamped
+
+        from hop_impedance.nodes.common import CONTROLLER_TOPIC, stamp_ns
+        from hop_impedance.nodes.qos import history_qos, input_qos
+        from hop_impedance_msgs.msg import ControllerImpedance
+
+        self.force: dict[int, float] = {}
+        self.controller: list[tuple[int, float]] = []  # (header stamp ns = the stance's take-off, arrival)
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node("latency_listener", context=self.context)
+        self.node.create_subscription(WrenchStamped, "/force_plate/wrench",
+                                      lambda m: self.force.setdefault(stamp_ns(m.header.stamp), time.monotonic()), input_qos(True))
+        self.node.create_subscription(ControllerImpedance, CONTROLLER_TOPIC,
+                                      lambda m: self.controller.append((stamp_ns(m.header.stamp), time.monotonic())),
+                                      history_qos(100))  # not depth 1: several stances' messages may come at once
+        self.executor = rclpy.executors.SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._stop = threading.Event()
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self) -> None:
+        while not self._stop.is_set():
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def close(self) -> None:
+        import rclpy
+
+        self._stop.set()
+        self.thread.join(2.0)
+        rclpy.shutdown(context=self.context)
+
+
+def offline_events(rec: str) -> list[tuple[int, int]]:
+    """(touchdown ns, take-off ns) of the complete stances ``analyze`` finds."""
+    from hop_impedance.biomech.analysis import analyze_recording
+    from hop_impedance.io.recording_io import load_recording
+
+    a = analyze_recording(load_recording(rec))
+    return [(a.start_ns + round(s.touchdown_s * 1e9), a.start_ns + round(s.takeoff_s * 1e9)) for s in a.stances if s.complete]
+
+
+def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> str:
+    """One line: take-off -> /impedance/controller over every stance (module docstring, item 0)."""
+    load = os.getloadavg()[0]
+    listener = Listener()
+    try:
+        time.sleep(1.0)  # discovery of the listener before the replay starts
+        report, cpu, wall = run(rec, rate=1.0, **kw)
+        time.sleep(0.3)
+    finally:
+        listener.close()
+    stamps = np.array(sorted(listener.force))
+    arrival = np.array([listener.force[s] for s in stamps])
+
+    def first_at(ns: int) -> float:
+        i = np.searchsorted(stamps, ns)
+        return float(arrival[i]) if i < stamps.size else np.nan
+
+    lat, before_next = [], []
+    ctrl = [(st, t) for st, t in listener.controller if st > 0]
+    for k, (td, to) in enumerate(events):
+        got = [t for st, t in ctrl if abs(st - to) < 5_000_000]
+        if not got:
+            lat.append(np.nan)
+            continue
+        lat.append(1e3 * (got[0] - first_at(to)))
+        if k + 1 < len(events):
+            before_next.append(got[0] < first_at(events[k + 1][0]))
+    lat = np.array(lat)
+    ok = lat[np.isfinite(lat)]
+    def d(node: str, key: str) -> str:
+        value = report.diag(node, key, "?")
+        try:
+            return f"{float(value):.1f}"
+        except ValueError:
+            return value
+
+    return (f"take-off -> /impedance/controller p50 {np.percentile(ok, 50):.1f} ms, p99 {np.percentile(ok, 99):.1f} ms, "
+            f"max {ok.max():.1f} ms over {ok.size} of {len(events)} stances (first included); before the next touchdown "
+            f"{sum(before_next)}/{len(before_next)}; fit of 3 joints p50/p99 {d('/impedance_estimator', 'fit_p50_ms')}/"
+            f"{d('/impedance_estimator', 'fit_p99_ms')} ms; pipeline's own take-off to profile p50/p99 "
+            f"{d('/impedance_estimator', 'takeoff_to_profile_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_profile_p99_ms')} ms; "
+            f"load average {load:.1f} on {os.cpu_count()} cores")
+
+
 def main() -> None:
-    rec = sys.argv[1] if len(sys.argv) > 1 else "recordings/sim_2p20hz_hard.mcap"
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    rec = args[0] if args else "recordings/sim_2p20hz_hard.mcap"
+    events = offline_events(rec)
+    for name, kw in (("one process, batch", {}), ("one process, low-latency", {"low_latency": True}),
+                     ("--processes, batch", {"processes": True}), ("--processes, low-latency", {"processes": True, "low_latency": True})):
+        print(f"{name:<26}: {controller_latency(rec, events, **kw)}", flush=True)
+    if "--latency-only" in sys.argv:
+        return
     infos = {i.topic: i for i in summarize(rec)}
     span = (infos["/force_plate/wrench"].last_ns - infos["/force_plate/wrench"].first_ns) * 1e-9
     counts = {t: i.count for t, i in infos.items()}

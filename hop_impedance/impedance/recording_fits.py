@@ -323,14 +323,15 @@ class StructureSelector:
         provisional.
     """
 
-    def __init__(self, options: FitOptions, terms=None, warmup_stances: int = 5) -> None:
+    def __init__(self, options: FitOptions, terms=None, warmup_stances: int = 5,
+                 given_reason: str = "given as a parameter") -> None:
         if terms is None and warmup_stances < 1:
             raise ValueError(f"warmup_stances must be >= 1 without given terms, got {warmup_stances}")
         self.options = options
         self.warmup_stances = int(warmup_stances)
         self.fixed = terms is not None
         self.structures: dict[str, TrialStructure] = (
-            {j: given_structure(terms[j], "given as a parameter") for j in JOINT_NAMES} if terms is not None else
+            {j: given_structure(terms[j], given_reason) for j in JOINT_NAMES} if terms is not None else
             {j: TrialStructure(SEED_TERMS, reason=f"provisional: the seed's k0, k1, b0 until {warmup_stances} stances "
                                                   "are in") for j in JOINT_NAMES})
         self._warmup: dict[str, list[JointImpedanceFit]] = {j: [] for j in JOINT_NAMES}

@@ -86,7 +86,10 @@ class ImpedanceEstimatorNode(Node):
         warmup = declare(self, "model_warmup_stances", 0, "choose the model structure over the first N stances (0 = model_terms)")
         terms = {j: declare(self, f"model_terms_{j}", list(SEED_TERMS), f"{j}: model structure fitted to every stance "
                             "when model_warmup_stances is 0") for j in JOINT_NAMES}
-        self.selector = StructureSelector(self.options, None if warmup > 0 else terms, max(warmup, 1))
+        self.selector = StructureSelector(
+            self.options, None if warmup > 0 else terms, max(warmup, 1),
+            "given (model_terms_<joint>; default: the seed's reduced model, its Eq. 10, fitted to every stance so "
+            "the coefficients mean the same in each; model_warmup_stances N chooses from the first N stances)")
         self.fit_s: list[float] = []
         self.latency_s: list[float] = []
         self.stances_in = 0
