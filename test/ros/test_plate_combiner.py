@@ -3,6 +3,7 @@ test/two_plates.py), the plate_combiner node (its own process, config/plates.yam
 over real DDS; the combined wrench gives the summed plate's stances and coefficients within
 1e-6 relative, and a plate that stops is reported on /diagnostics, not summed as zero."""
 
+import os
 import subprocess
 import time
 from pathlib import Path
@@ -22,12 +23,17 @@ from hop_impedance.io.recording_io import WRENCH_TYPE, load_recording  # noqa: E
 from hop_impedance.nodes.common import stamp_ns  # noqa: E402
 from hop_impedance.nodes.qos import input_qos  # noqa: E402
 from hop_impedance.nodes.runner import child_command  # noqa: E402
-from hop_impedance.recording import FORCE_TOPIC, ForcePlateSeries, Recording  # noqa: E402
+from hop_impedance.recording import ForcePlateSeries, Recording  # noqa: E402
 from test.two_plates import LEFT_TOPIC, RIGHT_TOPIC, split_two_plates  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 RECORDING = ROOT / "recordings" / "sim_2p20hz_hard.mcap"
 PLATES_YAML = ROOT / "config" / "plates.yaml"
+#: Topics of this test process only (config/plates.yaml's layout, its topic names overridden), so another
+#: pytest that happens to share the ROS domain cannot feed or read them.
+PREFIX = f"/test_plates_{os.getpid()}"
+TOPICS = {LEFT_TOPIC: PREFIX + LEFT_TOPIC, RIGHT_TOPIC: PREFIX + RIGHT_TOPIC}
+OUTPUT = PREFIX + "/force_plate/wrench"
 
 
 def _write_two_plates(path: Path, parts: dict, right_until: int | None = None, n: int | None = None) -> None:
@@ -40,7 +46,7 @@ def _write_two_plates(path: Path, parts: dict, right_until: int | None = None, n
     with McapWriter(path) as writer:
         for t, topic, w in events:
             stamp = {"sec": t // 1_000_000_000, "nanosec": t % 1_000_000_000}
-            writer.write(topic, WRENCH_TYPE, {
+            writer.write(TOPICS[topic], WRENCH_TYPE, {
                 "header": {"stamp": stamp, "frame_id": topic.rsplit("/", 1)[-1]},
                 "wrench": {"force": dict(zip("xyz", map(float, w[:3]))), "torque": dict(zip("xyz", map(float, w[3:])))},
             }, t)
@@ -60,20 +66,21 @@ def _run(mcap: Path, want: int, log_dir: Path, timeout_s: float = 60.0, settle_s
     children = []
     try:
         node = rclpy.create_node("test_plate_listener", context=context)
-        node.create_subscription(WrenchStamped, FORCE_TOPIC, wrenches.append, input_qos(True))
+        node.create_subscription(WrenchStamped, OUTPUT, wrenches.append, input_qos(True))
         node.create_subscription(DiagnosticArray, "/diagnostics", diags.append, 50)
         executor = rclpy.executors.SingleThreadedExecutor(context=context)
         executor.add_node(node)
         for name, params, pfile in (
-            ("plate_combiner", {"diagnostics_period_s": 0.2}, str(PLATES_YAML)),
+            ("plate_combiner", {"diagnostics_period_s": 0.2, "plate_topics": list(TOPICS.values()), "output_topic": OUTPUT},
+             str(PLATES_YAML)),
             # rate 2 (not 0): without consumers a rate-0 replay waits for acknowledgements block by block
-            ("replay", {"recording": str(mcap), "rate": 2.0, "topics": [LEFT_TOPIC, RIGHT_TOPIC]}, None),
+            ("replay", {"recording": str(mcap), "rate": 2.0, "topics": list(TOPICS.values())}, None),
         ):
             log = open(log_dir / f"{name}.log", "w")  # noqa: SIM115
             children.append(subprocess.Popen(child_command(name, params, pfile), env=child_env(), stdout=log, stderr=subprocess.STDOUT))
             log.close()
             if name == "plate_combiner":  # the replay waits for the combiner; the combiner must wait for us
-                _wait_until(executor, lambda: node.count_publishers(FORCE_TOPIC) > 0 and diags, 20.0)
+                _wait_until(executor, lambda: node.count_publishers(OUTPUT) > 0 and diags, 20.0)
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline and (len(wrenches) < want or children[1].poll() is None):
             executor.spin_once(timeout_sec=0.05)
