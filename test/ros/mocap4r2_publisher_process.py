@@ -7,7 +7,7 @@ indices only (USE_INDEX, empty names), both (USE_BOTH, with indices that point
 at the wrong markers, so only the names can be right), and an old driver's
 index-only marker (USE_NAME with an empty name). Every seventh frame lacks the
 knee (occluded). Positions follow :func:`position`. Exits 0 once all is acknowledged.
-Usage: python mocap4r2_publisher_process.py N
+Usage: python mocap4r2_publisher_process.py N TOPIC
 """
 
 import random
@@ -51,10 +51,10 @@ def frame_markers(i: int, rng: random.Random) -> list[Marker]:
 
 
 def main() -> int:
-    n = int(sys.argv[1])
+    n, topic = int(sys.argv[1]), sys.argv[2]
     rclpy.init()
     node = rclpy.create_node("fake_mocap4r2_driver")
-    pub = node.create_publisher(Markers, "/mocap4r2/markers", QoSProfile(depth=n, reliability=ReliabilityPolicy.RELIABLE))
+    pub = node.create_publisher(Markers, topic, QoSProfile(depth=n, reliability=ReliabilityPolicy.RELIABLE))
     deadline = time.monotonic() + 20.0
     while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
         time.sleep(0.02)

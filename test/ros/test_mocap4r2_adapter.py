@@ -2,6 +2,7 @@
 the adapter node republishes the contract MarkerArray, checked marker by marker."""
 
 import math
+import os
 import subprocess
 import sys
 import time
@@ -21,6 +22,9 @@ from mocap4r2_msgs.msg import Marker  # noqa: E402
 from test.ros.mocap4r2_publisher_process import INDICES, LABELS, position  # noqa: E402
 
 N = 200
+#: Topics of this test process only, so a pytest sharing the ROS domain cannot feed or read them.
+IN_TOPIC = f"/test_mocap4r2_{os.getpid()}/markers"
+OUT_TOPIC = f"/test_mocap4r2_{os.getpid()}/mocap/markers"
 ORIGIN = (0.5, -0.2, 0.01)
 
 
@@ -30,7 +34,8 @@ def test_driver_process_frames_arrive_as_contract_markers():
     rclpy.init(context=context)
     try:
         params = [
-            Parameter("input_topic", value="/mocap4r2/markers"),
+            Parameter("input_topic", value=IN_TOPIC),
+            Parameter("output_topic", value=OUT_TOPIC),
             Parameter("marker_names", value=list(MARKER_NAMES)),
             Parameter("marker_labels", value=LABELS),
             Parameter("marker_indices", value=INDICES),
@@ -39,10 +44,10 @@ def test_driver_process_frames_arrive_as_contract_markers():
         ]
         adapter = Mocap4r2AdapterNode(context=context, parameter_overrides=params)
         listener = rclpy.create_node("test_listener", context=context)
-        listener.create_subscription(MarkerArray, "/mocap/markers", frames.append,
+        listener.create_subscription(MarkerArray, OUT_TOPIC, frames.append,
                                      QoSProfile(depth=N, reliability=ReliabilityPolicy.RELIABLE))
         child = subprocess.Popen(
-            [sys.executable, str(Path(__file__).with_name("mocap4r2_publisher_process.py")), str(N)],
+            [sys.executable, str(Path(__file__).with_name("mocap4r2_publisher_process.py")), str(N), IN_TOPIC],
             env=child_env(), stderr=subprocess.PIPE, text=True,
         )
         executor = rclpy.executors.SingleThreadedExecutor(context=context)
