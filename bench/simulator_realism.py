@@ -30,7 +30,7 @@ from hop_impedance.biomech.analysis import analysis_to_json, analyze_recording
 from hop_impedance.biomech.joint_angles import joint_angles
 from hop_impedance.biomech.kinematics import sagittal_markers, segment_angles_from_points
 from hop_impedance.recording import MARKER_NAMES
-from hop_impedance.simulation.scenarios import TRUNK_BALANCE
+from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, TRUNK_BALANCE
 from hop_impedance.simulation.sensors import SensorConfig, noise_free
 from hop_impedance.simulation.simulate import simulate_recording
 
@@ -80,10 +80,12 @@ def hopexo_means() -> dict:
 CHAIN_POINTS = [MARKER_NAMES.index(n) for n in ("toe", "ankle", "knee", "hip", "head")]
 
 
-def measure(freq_hz: float, hops: int = 6, seed: int = 1, trunk: bool = False, flight: str = "prescribed") -> dict:
+def measure(freq_hz: float, hops: int = 6, seed: int = 1, trunk: bool = False, flight: str = "prescribed",
+            posture=DEFAULT_TOUCHDOWN_RHO) -> dict:
     """Mean per-hop figures that the analysis measures on a noise-free simulated recording (hard surface)."""
     rec, truth = simulate_recording(freq_hz, "hard", hops, seed=seed, sensors=noise_free(SensorConfig()),
-                                    trunk_balance=TRUNK_BALANCE if trunk else None, flight=flight)
+                                    touchdown_rho_rad=posture, trunk_balance=TRUNK_BALANCE if trunk else None,
+                                    flight=flight)
     doc = analysis_to_json(analyze_recording(rec))
     mass = doc["subject"]["body_mass_kg"]
     stances = [s for s in doc["stances"] if s["complete"] and s["joints"]][1:]  # the first lands from the lead-in
@@ -191,18 +193,26 @@ def main() -> None:
                         help="write docs/simulator_realism.md and the seed table between the README's markers")
     parser.add_argument("--trunk", action="store_true", help="with the trunk-balance moment (scenarios.TRUNK_BALANCE)")
     parser.add_argument("--flight", default="prescribed", choices=("prescribed", "energy_keeping"))
+    parser.add_argument("--posture", default=None,
+                        help="touchdown ankle rho1, knee flexion, hip flexion (rad), e.g. 1.6,0.8,0.5; "
+                             "default scenarios.DEFAULT_TOUCHDOWN_RHO")
     args = parser.parse_args()
+    posture = DEFAULT_TOUCHDOWN_RHO
+    if args.posture:
+        a, k, h = (float(v) for v in args.posture.split(","))
+        posture = (a, np.pi + k, np.pi + h)
     t0 = time.perf_counter()
     results = {}
     for f in (*SEED_TABLE1, 2.4):
         try:
-            results[f] = measure(f, trunk=args.trunk, flight=args.flight)
-        except ValueError as exc:  # e.g. a trial that stops before a second stance
-            raise SystemExit(f"simulator_realism: {exc}") from None
+            results[f] = measure(f, trunk=args.trunk, flight=args.flight, posture=posture)
+        except ValueError as exc:  # e.g. no calibrated hop, or a trial that stops before a second stance
+            raise SystemExit(f"simulator_realism: {f} Hz: {exc}") from None
     hopexo = hopexo_means()
     text = table(results, hopexo)
     notes = [n for f in results for n in results[f]["notes"]]
-    setup = (f"{'with' if args.trunk else 'without'} trunk balance, {args.flight} flight, "
+    setup = (f"{'with' if args.trunk else 'without'} trunk balance, {args.flight} flight, touchdown posture "
+             f"ankle {posture[0]:.2f}, knee {posture[1] - np.pi:.2f}, hip {posture[2] - np.pi:.2f} rad, "
              f"{min(r['n_stances'] for r in results.values())}-{max(r['n_stances'] for r in results.values())} "
              "analysed stances per frequency")
     print(text)
@@ -213,7 +223,8 @@ def main() -> None:
         doc = ROOT / "docs" / "simulator_realism.md"
         doc.write_text(
             "# Simulator realism\n\nProduced by `.venv/bin/python bench/simulator_realism.py --write"
-            f"{' --trunk' if args.trunk else ''}{'' if args.flight == 'prescribed' else ' --flight ' + args.flight}`; "
+            f"{' --trunk' if args.trunk else ''}{'' if args.flight == 'prescribed' else ' --flight ' + args.flight}"
+            f"{' --posture ' + args.posture if args.posture else ''}`; "
             "every simulated figure is measured by the analysis (`hop-impedance analyze`: stance detection and 2D "
             "inverse dynamics from the recorded markers and force plate) on noise-free simulated recordings "
             f"(hard surface, default law: seed Table 2 k0/k1, b0 = 0.5 N m s/rad, push-off; {setup}; "

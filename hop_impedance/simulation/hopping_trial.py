@@ -465,14 +465,21 @@ def calibrate(chain: Chain, config: HoppingConfig, q_td: np.ndarray, speed_guess
     speed = chain.gravity_m_s2 * 0.4 * period / 2.0 if speed_guess is None else speed_guess
     scale, rates = 1.0, None
     rounds = CALIBRATION_FLIGHT_ROUNDS if config.flight == "energy_keeping" else 1
+    accepted = None  # (speed, scale, rates) of the last round whose solution hops
     for round_ in range(rounds):
         speed, scale = solve(rates, [speed, scale])
+        if rounds == 1:
+            break
+        try:
+            law, st = stance(speed, scale, q_td, rates)
+            _next_touchdown_speed(chain, st, q_td)
+        except ValueError:
+            break  # this round's rates lead to no hop: keep the previous round's solution
+        accepted = (speed, scale, rates)
         if round_ < rounds - 1:
-            try:
-                law, st = stance(speed, scale, q_td, rates)
-                rates = flight_segment_rates(chain, law, st, q_td, 0.0)[0]
-            except ValueError:
-                break
+            rates = flight_segment_rates(chain, law, st, q_td, 0.0)[0]
+    if accepted is not None:
+        speed, scale, rates = accepted
     ts, tf, v1 = run(speed, scale, rates)
     slope = 0.0
     if has_push:

@@ -123,3 +123,23 @@ def test_prescribed_flight_discards_segment_energy_and_stays_the_default():
         chain, nxt.touchdown.g[2:], nxt.touchdown.gd[2:])
     assert e_to - e_td == pytest.approx(lost, rel=1e-6)
     assert e_to - e_td > 0.5
+
+
+def test_with_energy_keeping_flight_the_push_off_only_replaces_stance_losses():
+    """Default law (damping, push-off) with the trunk balance at 2.2 Hz: the flight keeps the segment energy
+    (flight term 0), so the push-off is exactly what damping, the ground and the trunk balance take plus the
+    change of touchdown energy (the springs left at take-off come back in flight). With the prescribed
+    flight the push-off also pays for the discarded segment energy (bench/simulator_energy_budget.py)."""
+    from hop_impedance.simulation.energy_budget import trial_energy_budget
+    from hop_impedance.simulation.scenarios import TRUNK_BALANCE
+
+    chain, cfg = hopping_config(2.2, "hard", 2, variability=False, trunk_balance=TRUNK_BALANCE,
+                                flight="energy_keeping")
+    tr = simulate_hopping(chain, cfg, seed=1)
+    assert tr.stop_reason == ""
+    b, nxt = trial_energy_budget(tr)
+    assert abs(b["flight_j"]) < 1e-6 * b["e_takeoff_j"]
+    losses = b["damping_j"] - b["ground_j"] - b["trunk_balance_j"]
+    gain = nxt["e_touchdown_j"] - b["e_touchdown_j"]
+    assert b["push_off_j"] == pytest.approx(losses + gain, abs=0.1)
+    assert losses > 5.0 and abs(gain) < 0.5 * losses  # measured: losses ~10 J, a near-periodic hop
