@@ -33,7 +33,7 @@ Rules (defaults in :class:`DetectorOptions`, the one place they are set)
 - **Detector failure.** A "stance" longer than ``max_stance_s`` (1.0 s; a
   hopping or drop-jump contact lasts 0.15-0.8 s) whose force over the last
   ``steady_s`` (0.1 s) is steady (SD below ``max(steady_sd_n, 3 sd)``) and far
-  from body weight (mean more than ``standing_tolerance_bw`` = 0.5 BW away
+  from body weight (mean more than ``standing_tolerance_bw`` = 0.25 BW away
   from 1 BW; without a body weight: mean below ``start_flight_max_n``) is not
   a stance but a flight the baseline was wrong for (an unzeroed plate, an
   offset step): the baseline is re-estimated as that window's mean and the
@@ -116,7 +116,7 @@ class DetectorOptions:
     max_stance_s: float = 1.0
     steady_s: float = 0.1
     steady_sd_n: float = 10.0
-    standing_tolerance_bw: float = 0.5
+    standing_tolerance_bw: float = 0.25
     start_flight_max_n: float = 100.0
     start_flight_max_bw: float = 0.25
 
@@ -273,10 +273,11 @@ class StanceDetector:
         self._noise_sd = 0.0
         self._reset(0.0, at_start=True)
 
-    def _reset(self, baseline_n: float, at_start: bool) -> None:
-        """State before the first sample (``at_start``) or before a re-run after a detector failure."""
+    def _reset(self, baseline_n: float, at_start: bool, rerun: bool = False) -> None:
+        """State before the first sample (``at_start``) or before a re-run after a detector failure (``rerun``)."""
         self._state: str | None = None  # None until the first sample, then "flight" / "stance"
         self._at_start = at_start
+        self._rerun = rerun
         self._baseline = float(baseline_n)
         self._prev_flight_baseline = float(baseline_n)
         self._flight = _FlightStats()
@@ -401,7 +402,7 @@ class StanceDetector:
             f"{self._baseline:.1f} N) read as a stance {what} to {t:.3f} s; flight baseline re-estimated "
             f"as {level:.1f} N and the samples run again"
         )
-        self._reset(level, at_start=cut)
+        self._reset(level, at_start=cut, rerun=True)
         for ts, fs in replay:
             self._feed(ts, fs, events)
 
@@ -410,9 +411,9 @@ class StanceDetector:
         opt = self.options
         self._first_t = t
         bw = self.body_weight_n or 0.0
-        if self._at_start:
+        if self._at_start and not self._rerun:
             flight = f < max(opt.start_flight_max_n, opt.start_flight_max_bw * bw)
-        else:
+        else:  # a re-run: the baseline was just measured
             flight = f - self._baseline < self._to_level
         if flight:
             self._enter_flight(t)

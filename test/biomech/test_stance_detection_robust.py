@@ -176,3 +176,14 @@ def test_foreign_force_plate_offset_every_hop():
     true_ns = np.array([h["t_td_ns"] for h in truth["per_hop"]])
     assert len(found) == len(true_ns) == len(analysis.stances)
     assert np.all(np.abs(td_ns - true_ns) < 3e6)
+
+
+@pytest.mark.parametrize("offset_n", [150.0, 300.0])
+def test_offset_larger_than_the_start_rule_is_found_by_the_failure_rule(sim, offset_n):
+    """A first sample above 100 N (0.25 BW) reads as a stance; 1 s of steady flight far from 1 BW corrects it."""
+    _, t, events, fz, bw = sim
+    det = StanceDetector(body_weight_n=bw)
+    det.push(t, fz + offset_n)
+    det.flush()
+    _assert_all_found(det.stances, events)
+    assert len(det.stances) == len(events) and len(det.warnings) == 1  # no pseudo-stance left at the start
