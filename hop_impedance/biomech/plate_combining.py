@@ -23,7 +23,10 @@ whose stamps differ by at most ``max_skew_ns``; after that plate k's sample at
 (each pair moves it by 1/20 of its residual). The combined sample carries the
 reference plate's stamp. A skew of exactly half a sample period (0.5 ms at
 1 kHz) cannot be told apart by stamps from the same skew to the neighbouring
-sample; the lock then trusts that both plates start on the same sample.
+sample: the lock takes the first pair within ``max_skew_ns``, which is the
+neighbour (-0.5 ms, one sample off) when the other plate's stream starts
+earlier than the reference's (tested). Below half a period there is no
+ambiguity.
 
 A missing plate is never summed as zero: an instant for which some plate
 has no sample (lost, or the plate stopped) yields no output, is counted
