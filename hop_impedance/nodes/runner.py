@@ -212,7 +212,22 @@ def _spin_until_done(executor, collector: ResultCollector, cfg: PipelineConfig, 
         collector.report.died = str(exc)
     except (KeyboardInterrupt, ExternalShutdownException):
         collector.report.interrupted = True
+    except Exception as exc:  # noqa: BLE001 - a node's callback failed in this process: report it, do not hang or trace
+        where = _raising_node(exc)
+        collector.report.died = f"node {where} failed: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"
     collector.report.finished = collector.done() and not collector.report.died
+
+
+def _raising_node(exc: BaseException) -> str:
+    """The pipeline node whose code raised ``exc`` (from the traceback's frames), or 'of the pipeline'."""
+    tb = exc.__traceback__
+    name = "of the pipeline"
+    while tb is not None:
+        module = tb.tb_frame.f_globals.get("__name__", "")
+        if module.startswith("hop_impedance.nodes.") and module.rsplit(".", 1)[1] in NODE_MODULES:
+            name = module.rsplit(".", 1)[1]
+        tb = tb.tb_next
+    return name
 
 
 def _in_process_nodes(cfg: PipelineConfig, context) -> list[Node]:
