@@ -183,6 +183,14 @@ def table(results: dict, hopexo: dict) -> str:
     return "\n".join(lines)
 
 
+def failed(freq_hz: float, reason: str) -> dict:
+    """Placeholder figures (NaN, shown as 'nan') for a frequency whose trial could not be measured."""
+    scalar = ("stance_ms", "grf_bw", "grf_n", "hip_exc_m", "k_leg", "freq_hz")
+    joint = ("rom", "mmax", "brake_j", "push_j", "power_pos_w_kg", "power_neg_w_kg", "moment_nm_kg", "rom_cycle_deg")
+    return {**{k: np.nan for k in scalar}, **{k: np.full(3, np.nan) for k in joint},
+            "notes": [f"{freq_hz} Hz not measured: {reason}"], "n_stances": 0}
+
+
 README_BEGIN = "<!-- simulator_realism table begin -->"
 README_END = "<!-- simulator_realism table end -->"
 
@@ -207,7 +215,7 @@ def main() -> None:
         try:
             results[f] = measure(f, trunk=args.trunk, flight=args.flight, posture=posture)
         except ValueError as exc:  # e.g. no calibrated hop, or a trial that stops before a second stance
-            raise SystemExit(f"simulator_realism: {f} Hz: {exc}") from None
+            results[f] = failed(f, str(exc))
     hopexo = hopexo_means()
     text = table(results, hopexo)
     notes = [n for f in results for n in results[f]["notes"]]
@@ -242,7 +250,7 @@ def main() -> None:
         readme = ROOT / "README.md"
         body = readme.read_text()
         if README_BEGIN in body and README_END in body:
-            seed_rows = text.split("\n\n")[0]
+            seed_rows = "\n".join(row for row in text.split("\n\n")[0].splitlines() if "energy" not in row)
             head, rest = body.split(README_BEGIN, 1)
             _, tail = rest.split(README_END, 1)
             readme.write_text(head + README_BEGIN + "\n" + seed_rows + "\n" + README_END + tail)
