@@ -160,3 +160,20 @@ def test_streamed_marker_checks(rec):
     assert mm.failure.rule == "marker_units" and mm.frames == 10  # decided at the 10th frame
     upper = InputChecks()
     assert upper.marker_names([n.upper() for n in names]) is None and upper.failure.rule == "marker_names"
+
+
+def test_info_and_replay_read_a_cut_recording_to_the_break(tmp_path, capfd):
+    half = bad.truncated(tmp_path / "half.mcap", bad.BUNDLED, 0.5)
+    assert main(["info", str(half)]) == 0
+    out = capfd.readouterr().out
+    from hop_impedance.io.mcap_io import MessageStream
+
+    total = sum(1 for _ in MessageStream(bad.BUNDLED, topics=["/force_plate/wrench"], decode=False))
+    kept = sum(1 for _ in MessageStream(half, topics=["/force_plate/wrench"], decode=False))
+    force_row = next(line for line in out.splitlines() if line.startswith("/force_plate/wrench"))
+    assert int(force_row.split()[2]) == kept > 0.4 * total  # (was an empty table with one 368 KB chunk)
+    assert "warning: half.mcap: truncated or corrupt: read" in out and "stopped after t=" in out
+    assert main(["replay", str(half), "--rate", "0", "--wait", "0"]) == 0
+    captured = capfd.readouterr()
+    assert f"/force_plate/wrench: {kept} messages published" in captured.out
+    assert "hop-impedance replay: warning: half.mcap: truncated or corrupt" in captured.err
