@@ -69,6 +69,8 @@ class BatchOptions:
         JSON indent, as ``analyze --indent``.
     detector : tuple of str
         ``NAME=VALUE`` stance detection settings, as ``analyze --detector``.
+    model_terms : tuple of str
+        Fixed model structure, as ``analyze --model-terms`` (empty: chosen per joint from the F-tests).
     """
 
     cutoff_hz: float = 12.0
@@ -76,6 +78,7 @@ class BatchOptions:
     segments: dict | None = field(default=None, compare=False, hash=False)
     indent: int | None = None
     detector: tuple[str, ...] = ()
+    model_terms: tuple[str, ...] = ()
 
     def analysis_options(self):
         """The :class:`AnalysisOptions` ``analyze`` builds from the same flags."""
@@ -262,7 +265,7 @@ def _analyze(item, options: BatchOptions) -> Outcome:
     check_recording(checks, rec.force, rec.markers)
     analysis = analyze_recording(rec, options.analysis_options())
     doc = analysis_to_json(analysis)
-    fits = add_fits_to_json(doc, analysis)
+    fits = add_fits_to_json(doc, analysis, list(options.model_terms) or None)
     return Outcome(
         name=item.name,
         json_text=json.dumps(doc, indent=options.indent, allow_nan=False),

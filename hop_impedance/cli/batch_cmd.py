@@ -40,6 +40,8 @@ def register(subparsers) -> None:
     p.add_argument("--indent", type=int, default=None, help="as analyze: pretty-print the JSON with this indent")
     p.add_argument("--detector", action="append", metavar="NAME=VALUE",
                    help="as analyze: stance detection setting (repeatable), e.g. takeoff_n=15")
+    p.add_argument("--model-terms", metavar="T1,T2,...",
+                   help="as analyze: fit this structure (e.g. k0,k1,b0) to every stance and joint")
     p.set_defaults(func=run)
 
 
@@ -70,8 +72,14 @@ def run(args: argparse.Namespace) -> int:
         segments=load_overrides(args.segments) if args.segments else None,
         indent=args.indent,
         detector=tuple(args.detector or ()),
+        model_terms=tuple(t.strip() for t in (args.model_terms or "").split(",") if t.strip()),
     )
-    options.analysis_options()  # a bad --detector setting is a one-line error now, not one failure per recording
+    # bad --detector / --model-terms: one line now, not one failure per recording
+    options.analysis_options()
+    if options.model_terms:
+        from hop_impedance.impedance.recording_fits import given_structure
+
+        given_structure(list(options.model_terms), "--model-terms")
     mode = "serial" if args.serial else args.scheduler or "local"
     summary = run_batch(items, args.out, options, mode=mode, workers=args.workers, group_by=args.group_by,
                         force=args.force)
