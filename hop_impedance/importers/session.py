@@ -290,6 +290,7 @@ def session_to_recording(
     height_m: float | None = None,
     plates: list[int] | None = None,
     sex: str = "female",
+    frame_out: dict | None = None,
 ) -> Recording:
     """Map a lab session to a contract recording.
 
@@ -311,6 +312,10 @@ def session_to_recording(
         0-based plates to use; default all, summed.
     sex : str
         For the de Leva tables.
+    frame_out : dict, optional
+        Filled with ``rotation`` (lab -> contract, 3x3) and ``origin`` (m, lab)
+        so that a caller can express each plate in the same frame
+        (:mod:`hop_impedance.importers.bilateral_import`).
 
     Returns
     -------
@@ -356,6 +361,8 @@ def session_to_recording(
     )
     warnings += notes
     origin = session.origin_m if session.origin_m is not None else _ground_origin(chosen, rotation)
+    if frame_out is not None:
+        frame_out.update(rotation=rotation, origin=np.asarray(origin, float))
 
     f = np.stack([to_contract(p.force_n, rotation) for p in chosen])
     m = np.stack([to_contract(p.moment_nm, rotation) for p in chosen])

@@ -1,0 +1,117 @@
+"""Lab session -> contract v2 :class:`~hop_impedance.bilateral.BilateralRecording` (both legs, one wrench per foot).
+
+The v1 import (:func:`~hop_impedance.importers.session.session_to_recording`)
+sums the plates and keeps the right leg; it stays the default and is called
+unchanged here for the v1 view. The left leg's markers come from a second call
+with the left-side marker map and the same origin, checked to give the same
+frame. Each plate's wrench is then expressed in that frame about the contract
+origin with the same moment transfer as the sum (:func:`total_wrench` of one
+plate), so the per-side wrenches add up to the v1 summed wrench.
+
+Which plate is which foot: each loaded plate (vertical force above 20 N on
+some sample) goes to the side whose ankle marker is laterally (contract y)
+closest to the plate's force-weighted mean centre of pressure; several plates
+under one foot are summed. A side that no plate carried (a leg in the air, or
+off the plates, all trial long) gets an all-zero wrench: single-leg hopping.
+The left leg's ``head`` is the right map's (v2 has one head marker, the HAT's
+top; it is not part of either leg's inverse dynamics).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from hop_impedance.bilateral import SIDES, BilateralRecording
+from hop_impedance.importers.frames import to_contract
+from hop_impedance.importers.marker_mapping import MarkerMapping
+from hop_impedance.importers.plates import total_wrench
+from hop_impedance.importers.session import LabSession, session_to_recording
+from hop_impedance.recording import ForcePlateSeries
+
+#: A plate is "loaded" (assigned to a foot) when its vertical force exceeds this on some sample (N).
+LOADED_N = 20.0
+
+
+def session_to_bilateral(
+    session: LabSession, right: MarkerMapping, left: MarkerMapping, **options
+) -> BilateralRecording:
+    """Both legs and both plates of a lab session (contract v2).
+
+    Parameters
+    ----------
+    session : LabSession
+        Must have markers (the plates are assigned to feet by the ankle markers).
+    right, left : MarkerMapping
+        Marker maps of the right and the left leg (e.g. ``opencap_right``, ``opencap_left``).
+    **options
+        As for :func:`session_to_recording` (``up``, ``forward``, ``mass_kg``,
+        ``height_m``, ``plates``, ``sex``); the v1 view is exactly what that
+        function returns with the right map.
+
+    Raises
+    ------
+    ValueError
+        No markers, or the left map resolves the lab axes differently from the right one.
+    """
+    if session.marker_positions_m is None:
+        raise ValueError(f"{session.source or 'session'}: per-leg import needs markers (to tell the feet's plates apart)")
+    frame: dict = {}
+    rec = session_to_recording(session, right, frame_out=frame, **options)
+    left_options = {**options, "mass_kg": rec.subject.body_mass_kg, "height_m": rec.subject.body_height_m}
+    left_frame: dict = {}
+    left_rec = session_to_recording(replace(session, origin_m=frame["origin"]), left, frame_out=left_frame, **left_options)
+    if not np.allclose(left_frame["rotation"], frame["rotation"], atol=1e-9):
+        raise ValueError(
+            f"{session.source or 'session'}: the left marker map gives other lab axes than the right one; give --up and --forward"
+        )
+    chosen = session.plates if options.get("plates") is None else [session.plates[i] for i in options["plates"]]
+    rotation, origin = frame["rotation"], frame["origin"]
+    per_plate = []
+    for p in chosen:
+        f = to_contract(p.force_n, rotation)
+        m = to_contract(p.moment_nm, rotation)
+        r = np.broadcast_to(to_contract(p.point_m, rotation, origin), p.force_n.shape)
+        per_plate.append(total_wrench(f[None], m[None], r[None], np.zeros(3)))
+    raw_sum = sum(f for f, _ in per_plate)
+    sign = -1.0 if np.allclose(raw_sum, -rec.force.force_n, atol=1e-6) and np.any(raw_sum) else 1.0
+    per_plate = [(sign * f, sign * m) for f, m in per_plate]
+    ankle_y = {
+        "right": float(np.nanmedian(rec.markers.marker("ankle")[:, 1])),
+        "left": float(np.nanmedian(left_rec.markers.marker("ankle")[:, 1])),
+    }
+    stamps = rec.force.stamp_ns
+    sums = {side: [np.zeros_like(rec.force.force_n), np.zeros_like(rec.force.torque_nm)] for side in SIDES}
+    notes = []
+    for p, (f, m) in zip(chosen, per_plate):
+        loaded = f[:, 2] > LOADED_N
+        if not loaded.any():
+            continue
+        cop_y = m[loaded, 0] / f[loaded, 2]  # y of the point on z = 0 where the force acts: Mx = y Fz
+        mean_y = float(np.sum(cop_y * f[loaded, 2]) / np.sum(f[loaded, 2]))
+        side = min(SIDES, key=lambda s: abs(ankle_y[s] - mean_y))
+        sums[side][0] += f
+        sums[side][1] += m
+        notes.append(f"plate {p.name or '?'} -> {side} foot (mean centre of pressure y {mean_y:+.3f} m, ankle y {ankle_y[side]:+.3f} m)")
+    for side in SIDES:
+        if not np.any(sums[side][0][:, 2] > LOADED_N):
+            notes.append(f"no plate carried the {side} foot: its wrench is zero (leg in the air or off the plates)")
+    rec.warnings.extend(notes)
+    plates = {side: ForcePlateSeries(stamps.copy(), f, m) for side, (f, m) in sums.items()}
+    left_markers = left_rec.markers
+    head = left_markers.names.index("head")
+    left_markers.positions_m[:, head] = rec.markers.marker("head")  # contract v2: one head marker (one HAT)
+    return BilateralRecording(rec, plates, left_markers)
+
+
+def import_opensim_bilateral(
+    trc_path: str | Path, mot_path: str | Path, right: str = "opencap_right", left: str = "opencap_left", **options
+) -> BilateralRecording:
+    """Contract v2 recording from an OpenSim TRC + GRF MOT pair with one plate per foot."""
+    from hop_impedance.importers.marker_mapping import load_marker_mapping
+    from hop_impedance.importers.opensim_import import opensim_session
+
+    session = opensim_session(trc_path, mot_path)
+    return session_to_bilateral(session, load_marker_mapping(right), load_marker_mapping(left), **options)
