@@ -22,9 +22,10 @@ Push-off timing is printed as fractions of the actual stance: onset, peak and
 end of the sin^2 pulse, and the instant of maximal ankle flexion.
 
 Usage: .venv/bin/python bench/simulator_energy_budget.py [--hops 5] [--freqs 1.53,1.87,2.2]
-       [--flights prescribed,energy_keeping] [--trunk K] [--write]
+       [--flights prescribed,energy_keeping] [--trunk K] [--write] [--lossless]
 (``--write`` also writes docs/simulator_energy.md; ``--trunk K`` adds a trunk-balance moment of
-stiffness K N m/rad.)
+stiffness K N m/rad; ``--lossless`` runs issue 17's passive test instead: no damping, no push-off,
+lossless surface, per hop stance time and COM apex, hop N against hop 3.)
 """
 
 from __future__ import annotations
@@ -64,6 +65,34 @@ def trial_budget(freq_hz: float, hops: int, flight: str = "prescribed", trunk: f
     return [r for r in rows if "flight_j" in r], trial.stop_reason
 
 
+def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str) -> str:
+    """Issue 17's passive test: no damping, no push-off, lossless hard surface, no sliding; per hop the stance
+    time and the COM apex height of the following flight, and how hop ``hops`` compares with hop 3."""
+    from hop_impedance.simulation.dynamics import body_com, com_velocity
+    from hop_impedance.simulation.ground import HARD, lossless
+    from hop_impedance.simulation.scenarios import Effects
+
+    chain, config = hopping_config(freq_hz, "hard", hops, Effects(damping=False, push_off=False), variability=False,
+                                   trunk_balance=TrunkBalance(trunk) if trunk else None, flight=flight)
+    config = dataclasses.replace(config, surface=lossless(HARD), friction_coefficient=None)
+    try:
+        trial = simulate_hopping(chain, config, seed=1)
+    except ValueError as exc:
+        return f"{flight}, {freq_hz} Hz, trunk {trunk:g}: no trial ({exc})"
+    rows = []
+    for rec in trial.stances:
+        g, gd = rec.stance.g[-1], rec.stance.gd[-1]
+        vz = com_velocity(chain, g, gd)[1]
+        rows.append((rec.stance.duration_s, body_com(chain, g)[1] + max(vz, 0.0) ** 2 / (2 * chain.gravity_m_s2)))
+    lines = [f"{flight}, {freq_hz} Hz, trunk {trunk:g} N m/rad: {len(rows)} hops"
+             + (f" (stopped: {trial.stop_reason})" if trial.stop_reason else "")]
+    lines += [f"  hop {i + 1}: stance {1000 * ts:.1f} ms, COM apex {apex:.4f} m" for i, (ts, apex) in enumerate(rows)]
+    if len(rows) >= 4:
+        (ts3, a3), (tsn, an) = rows[2], rows[-1]
+        lines.append(f"  hop {len(rows)} vs hop 3: stance {tsn / ts3 - 1:+.1%}, apex {an / a3 - 1:+.2%}")
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hops", type=int, default=5)
@@ -71,7 +100,14 @@ def main() -> None:
     parser.add_argument("--flights", default="prescribed,energy_keeping")
     parser.add_argument("--trunk", type=float, default=0.0, help="trunk-balance stiffness (N m/rad), 0 = none")
     parser.add_argument("--write", action="store_true", help="also write docs/simulator_energy.md")
+    parser.add_argument("--lossless", action="store_true",
+                        help="instead: the passive lossless trial (no damping, push-off or ground loss) hop by hop")
     args = parser.parse_args()
+    if args.lossless:
+        for flight in args.flights.split(","):
+            for freq in (float(f) for f in args.freqs.split(",")):
+                print(lossless_hops(freq, args.hops, args.trunk, flight), flush=True)
+        return
     lines = ["| flight | frequency (Hz) | push-off work | damping | springs left at take-off | ground | trunk | flight | "
              "stance balance residual |", "|---|---|---|---|---|---|---|---|---|"]
     timing_lines = ["| flight | frequency (Hz) | push-off onset | push-off peak | push-off end | ankle max flexion |",
