@@ -28,5 +28,18 @@ def test_demo_table_mcap_and_rrd(tmp_path):
     counts = {i.topic: i.count for i in summarize(out / "pipeline.mcap")}
     inputs = {i.topic: i.count for i in summarize("recordings/sim_2p20hz_hard.mcap")}
     assert counts["/impedance/stance_summary"] == 10 and counts["/force_plate/wrench"] == inputs["/force_plate/wrench"]
+    # one model per trial (issue 15): the demo says which structure each joint uses and why, and every accepted
+    # profile of a joint carries exactly those terms
+    from hop_impedance.io.mcap_io import MessageStream
+
+    said = {line.split(":")[0].split()[1]: line.split(":")[1].split() for line in run.stdout.splitlines()
+            if line.startswith("model ")}
+    assert sorted(said) == ["ankle", "hip", "knee"] and all("given" in line or "fixed after" in line
+                                                            for line in run.stdout.splitlines() if line.startswith("model "))
+    terms = {}
+    for m in MessageStream(out / "pipeline.mcap", ["/impedance/profile"]):
+        if m.message.accepted:
+            terms.setdefault(m.message.joint, set()).add(tuple(m.message.terms))
+    assert {j: t for j, t in terms.items()} == {j: {tuple(said[j])} for j in said}
     seq, tables = column(load_store(rrd), S.STANCE_TIMELINE, "/" + S.TABLE, "TextDocument:text")
     assert list(seq) == list(range(10))
