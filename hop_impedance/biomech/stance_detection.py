@@ -41,7 +41,16 @@ Rules (defaults in :class:`DetectorOptions`, the one place they are set)
   again with it, so the hops inside are found; a warning says so
   (:attr:`StanceDetector.warnings`). Steady force *near* body weight is
   quiet standing (before or after hopping, as in a countermovement jump):
-  a long stance, not a failure.
+  a long stance, not a failure. The re-run is a loop over a queue of
+  samples (no recursion), and a "failure" whose steady level is already
+  within the take-off level of the baseline is none (a re-run would repeat
+  itself).
+- **Message loss.** Samples missing for longer than ``steady_s`` inside a
+  stance restart the failure test's clock at the first sample after the gap:
+  a gap is not a long steady stance. The stance is bridged over the gap and
+  kept; the analysis rejects it for its lost samples
+  (:func:`hop_impedance.biomech.stages.missing_samples_reason`, "... (message
+  loss)"). A 1 s gap inside a stance used to recurse without end here.
 - Event times are sub-sample: the linear interpolation of the instant at
   which Fz - baseline crosses ``event_level_n`` (default = the take-off
   level), the level at which "a person looking at the curve" sees the force
@@ -343,7 +352,9 @@ class StanceDetector:
             if np.isfinite(self._last_t) and t <= self._last_t:
                 raise ValueError(f"time stamps must increase: {t} s after {self._last_t} s")
             self._last_t = t
-            self._feed(t, f, events)
+            replay = self._feed(t, f, events)
+            if replay:
+                self._run(replay, events)
         return events
 
     def flush(self) -> list[ContactEvent]:
@@ -360,28 +371,57 @@ class StanceDetector:
 
     # -- internals -------------------------------------------------------------
 
-    def _feed(self, t: float, f: float, events: list[ContactEvent]) -> None:
+    def _run(self, samples: list[tuple[float, float]], events: list[ContactEvent]) -> None:
+        """Feed samples through the state machine; a detector failure puts its stance's samples back in front.
+
+        A loop over a queue, not recursion: a re-run may find another failure
+        further on (its samples are queued again), and a run of any length
+        never grows the stack.
+        """
+        queue = collections.deque(samples)
+        while queue:
+            t, f = queue.popleft()
+            replay = self._feed(t, f, events)
+            if replay:
+                queue.extendleft(reversed(replay))
+
+    def _feed(self, t: float, f: float, events: list[ContactEvent]) -> list[tuple[float, float]] | None:
+        """One sample; returns the samples to run again after a detector failure, else None."""
         self._step(t, f, events)
         if self._state == "stance":
-            self._stance_samples.append((t, f))
-            if t - self._stance_samples[0][0] > self.options.max_stance_s:
-                self._check_failure(t, events)
+            samples = self._stance_samples
+            if samples and t - samples[-1][0] > self.options.steady_s:
+                # Samples missing for longer than the steadiness window (message loss): the
+                # failure test's clock restarts here, so a gap is never read as a long steady
+                # stance (a 1 s gap inside a stance used to re-run the same samples with the
+                # same baseline forever). The stance around the gap is kept and rejected for
+                # its lost samples (stages.missing_samples_reason).
+                samples.clear()
+            samples.append((t, f))
+            if t - samples[0][0] > self.options.max_stance_s:
+                return self._check_failure(t)
+        return None
 
-    def _check_failure(self, t: float, events: list[ContactEvent]) -> None:
-        """A long "stance" whose recent force is steady and far from body weight: re-run with a new baseline."""
+    def _check_failure(self, t: float) -> list[tuple[float, float]] | None:
+        """A long "stance" whose recent force is steady and far from body weight: the samples to re-run with a new baseline.
+
+        Returns None when there is no failure (or a re-run could not change
+        anything: the steady level is already within the take-off level of
+        the baseline).
+        """
         opt = self.options
         samples = self._stance_samples
         if len(samples) < 10:
-            return
+            return None
         # the steady window: the last steady_s of samples
         i = len(samples) - 1
         while i > 0 and t - samples[i - 1][0] <= opt.steady_s:
             i -= 1
         if len(samples) - i < 5:
-            return
+            return None
         window = np.fromiter((samples[j][1] for j in range(i, len(samples))), float, len(samples) - i)
         if np.std(window) > max(opt.steady_sd_n, 3 * self._noise_sd):
-            return
+            return None
         level = float(np.mean(window))
         rel = level - self._baseline
         bw = self.body_weight_n
@@ -389,11 +429,13 @@ class StanceDetector:
             failure = abs(rel - bw) > opt.standing_tolerance_bw * bw
         else:
             failure = rel < opt.start_flight_max_n
+        if failure and abs(rel) < self._to_level:
+            failure = False  # the baseline is already right: a re-run would repeat this run
         if not failure:
             # quiet standing: keep only what a later failure test could need
             while len(samples) > 1 and t - samples[1][0] > opt.max_stance_s + 30.0:
                 samples.popleft()
-            return
+            return None
         replay = list(samples)
         cut = self._touchdown_cut
         what = "from the start of the recording" if cut else f"from {replay[0][0]:.3f} s"
@@ -403,8 +445,7 @@ class StanceDetector:
             f"as {level:.1f} N and the samples run again"
         )
         self._reset(level, at_start=cut, rerun=True)
-        for ts, fs in replay:
-            self._feed(ts, fs, events)
+        return replay
 
     def _start(self, t: float, f: float) -> None:
         """First sample (of the recording, or of a re-run after a failure)."""

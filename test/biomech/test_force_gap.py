@@ -1,0 +1,87 @@
+"""A 1 s force gap that starts inside a stance (message loss), offline and through ``analyze``.
+
+It used to send the detector into unbounded recursion: the first samples after
+the gap (in flight) made the "stance" look longer than ``max_stance_s`` with a
+steady force far from body weight, the failure test re-ran the stance's
+samples with a baseline equal to the one in use, which found the same failure
+again (RecursionError; the in-process pipeline printed "node inverse_dynamics
+failed: RecursionError"). Built from the bundled recording, with the gap
+starting at 70 % of the fourth stance (the recursion needed a gap that ends in
+a flight; 60-90 % of that stance all did).
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from hop_impedance.biomech.analysis import analyze_recording
+from hop_impedance.biomech.stance_detection import detect_stances
+from hop_impedance.cli.main import main
+from test.cli import bad_recordings as bad
+
+
+@pytest.fixture(scope="module")
+def rec():
+    return bad.bundled()
+
+
+@pytest.fixture(scope="module")
+def clean(rec):
+    return analyze_recording(rec)
+
+
+def gap_start_s(clean, frac: float = 0.7) -> float:
+    s = clean.stances[3]
+    return s.touchdown_s + frac * (s.takeoff_s - s.touchdown_s)
+
+
+def test_gap_stance_rejected_as_message_loss_others_unchanged(rec, clean):
+    start = gap_start_s(clean)
+    holed = analyze_recording(bad.gap(rec, start, 1.0, markers=False))
+    assert not any("detector failure" in w for w in holed.warnings)  # a gap is not a wrong baseline
+    lost = [s for s in holed.stances if s.rejection_reason is not None]
+    assert len(lost) == 1 and "(message loss)" in lost[0].rejection_reason
+    assert lost[0].touchdown_s == clean.stances[3].touchdown_s < start < lost[0].takeoff_s
+    # every stance that does not touch the gap [start, start + 1 s] is found again with the same events and data
+    outside = [c for c in clean.stances if c.takeoff_s < start or c.touchdown_s > start + 1.0]
+    accepted = [s for s in holed.stances if s.rejection_reason is None]
+    assert len(accepted) == len(outside) == 7
+    for s, c in zip(accepted, outside):
+        assert abs(s.touchdown_s - c.touchdown_s) < 1e-6 and abs(s.takeoff_s - c.takeoff_s) < 1e-6
+        peak = np.max(np.abs(c.joints.moment_nm), axis=0)
+        # the first stance after the gap has a shorter flight for its baseline and filter start: 0.02 N m
+        assert np.all(np.max(np.abs(s.joints.moment_nm - c.joints.moment_nm), axis=0) < 1e-3 * peak)
+
+
+def test_long_gaps_run_without_recursion(rec, clean):
+    """Gaps of 1-20 s from several points of a stance: never a RecursionError, never more stances than samples allow."""
+    t = (rec.force.stamp_ns - rec.start_ns) * 1e-9
+    fz = rec.force.force_n[:, 2]
+    bw = rec.subject.body_mass_kg * 9.81
+    for frac in (0.1, 0.5, 0.9):
+        start = gap_start_s(clean, frac)
+        for length in (1.0, 2.5):
+            keep = ~((t >= start) & (t < start + length))
+            stances = detect_stances(t[keep], fz[keep], body_weight_n=bw)
+            before = [s for s in stances if s.takeoff_s < start]
+            assert [s.touchdown_s for s in before] == [s.touchdown_s for s in clean.stances[:3]]
+            around = [s for s in stances if s.touchdown_s < start < s.takeoff_s]
+            assert len(around) == 1  # the stance with the gap is one stance, bridged (and rejected by analysis)
+    # 18 s missing from inside a stance, flight after it: one bridged stance, no failure re-run
+    tt = np.concatenate([np.arange(0, 1.0, 1e-3), np.arange(19.0, 20.0, 1e-3)])
+    ff = np.where(((tt > 0.3) & (tt < 0.5)) | ((tt > 0.8) & (tt < 19.2)), 2 * bw, 0.0)
+    stances = detect_stances(tt, ff, body_weight_n=bw)
+    assert [(round(s.touchdown_s, 2), round(s.takeoff_s, 2)) for s in stances] == [(0.3, 0.5), (0.8, 19.2)]
+
+
+def test_analyze_cli_exit_zero_and_reason_in_json(tmp_path, rec, clean, capsys):
+    path = bad.write(tmp_path / "gap.mcap", bad.gap(rec, gap_start_s(clean), 1.0, markers=False))
+    assert main(["analyze", str(path), "--json", str(tmp_path / "a.json")]) == 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "RecursionError" not in err
+    assert "/force_plate/wrench: 1000 sample(s) missing in 1 gap(s)" in err
+    assert "8 stances, 7 with inverse dynamics" in err
+    rows = json.loads((tmp_path / "a.json").read_text())["stances"]
+    reasons = [r["rejection_reason"] for r in rows if r["rejection_reason"]]
+    assert len(reasons) == 1 and "(message loss)" in reasons[0]
