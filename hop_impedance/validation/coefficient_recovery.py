@@ -152,6 +152,19 @@ def recover_trial(
         default_fit_options(analysis.options), reduce=False, terms=LAW_TERMS, exclude_touchdown_s=edge_s, exclude_takeoff_s=edge_s
     )
     fits = fit_recording(analysis, options)
+    result = compare_with_law(analysis, fits, truth, skip_first=skip_first)
+    result.trial_medians.append(
+        {j: np.median(result.error_array(j), axis=0) if result.errors[j] else np.full(2, np.nan) for j in JOINTS}
+    )
+    return result
+
+
+def compare_with_law(analysis, fits, truth: dict, *, skip_first: int = 0, law_scale: float = 1.0) -> RecoveryResult:
+    """Per stance and joint, the fitted k0/k1 against ``law_scale`` x the truth's law (stances matched by touchdown).
+
+    ``law_scale`` is 0.5 for one leg of a two-leg recording built from one
+    lumped trial (:mod:`hop_impedance.validation.bilateral_recovery`).
+    """
     result = RecoveryResult(fits=fits, simulated_stances=len(truth["stances"]))
     truth_by_touchdown = {round(s["touchdown_s"], 2): s for s in truth["stances"]}
     for stance, stance_fits in zip(analysis.stances, fits):
@@ -165,12 +178,9 @@ def recover_trial(
             elif not fit.ok:
                 result.rejected[joint].append(fit.rejection_reason)
             else:
-                law = true["impedance"][joint]
+                law = {k: law_scale * true["impedance"][joint][k] for k in ("k0", "k1")}
                 result.errors[joint].append([fit.coefficients[k] / law[k] - 1.0 for k in ("k0", "k1")])
                 result.z_scores[joint].append([(fit.coefficients[k] - law[k]) / fit.std_errors[k] for k in ("k0", "k1")])
-    result.trial_medians.append(
-        {j: np.median(result.error_array(j), axis=0) if result.errors[j] else np.full(2, np.nan) for j in JOINTS}
-    )
     return result
 
 

@@ -138,16 +138,11 @@ def _analysis_inputs(rec, analysis):
     return t, smooth, kin
 
 
-@pytest.mark.parametrize("side", ["left", "right"])
-def test_leg_moments_agree_with_opensim_within_2_percent(legs, side, tmp_path):
-    bilateral, analyses = legs
-    analysis = analyses[side]
+def _compare_with_opensim(bilateral, analysis, side, tmp_path) -> np.ndarray:
+    """max |ours - OpenSim| / peak per joint over the leg's accepted contact."""
     accepted = [s for s in analysis.stances if s.joints is not None]
     assert len(accepted) == 1  # the landing + rebound contact; the second landing is cut by the file's end
     stance = accepted[0]
-    # per-leg body: half the lumped leg segments (de Leva one side: 1.29 % foot, 4.81 % shank, 14.78 % thigh of 60 kg)
-    np.testing.assert_allclose([analysis.model.foot.mass_kg, analysis.model.shank.mass_kg, analysis.model.thigh.mass_kg],
-                               [0.0129 * 60, 0.0481 * 60, 0.1478 * 60], rtol=1e-12)
     t, wrench, kin = _analysis_inputs(bilateral.leg(side), analysis)
     sel = (t >= stance.touchdown_s) & (t <= stance.takeoff_s)
     assert np.count_nonzero(sel) == len(stance.joints.time_s)
@@ -160,5 +155,29 @@ def test_leg_moments_agree_with_opensim_within_2_percent(legs, side, tmp_path):
     assert np.all(peak > 50)  # N m: a real one-leg landing, not an empty plate
     rel = np.max(np.abs(mine - theirs), axis=0) / peak
     print(f"{side}: peak {np.round(peak, 1)} N m, max |ours - OpenSim| / peak {np.round(100 * rel, 3)} %")
+    return rel
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_leg_moments_agree_with_opensim_within_2_percent(legs, side, tmp_path):
+    """Measured: left 0.06 / 1.09 / 0.87 %, right 0.10 / 0.61 / 1.05 % (ankle / knee / hip) of peak."""
+    bilateral, analyses = legs
+    analysis = analyses[side]
+    # per-leg body: half the lumped leg segments (de Leva one side: 1.29 % foot, 4.81 % shank, 14.78 % thigh of 60 kg)
+    np.testing.assert_allclose([analysis.model.foot.mass_kg, analysis.model.shank.mass_kg, analysis.model.thigh.mass_kg],
+                               [0.0129 * 60, 0.0481 * 60, 0.1478 * 60], rtol=1e-12)
+    rel = _compare_with_opensim(bilateral, analysis, side, tmp_path)
     assert np.all(rel < 0.02), rel
 
+
+def test_raw_skin_markers_at_12_hz_are_not_a_rigid_problem(tmp_path):
+    """The limit that the rigid-leg construction removes, measured on the raw 100 Hz skin markers with the default
+    12 Hz: OpenSim's rigid leg and our frame-by-frame joint points differ by tens of percent of peak (see the
+    figures printed; skin markers change segment lengths by up to 2.9 cm, and per-marker filtering bends a rigid
+    leg in the landing impact). Not a defect of either inverse dynamics: they solve different problems."""
+    raw = import_opensim_bilateral(TRC, MOT, mass_kg=60.0)
+    analyses = analyze_legs(raw)
+    for side in SIDES:
+        (tmp_path / side).mkdir()
+        rel = _compare_with_opensim(raw, analyses[side], side, tmp_path / side)
+        assert np.max(rel) > 0.05
