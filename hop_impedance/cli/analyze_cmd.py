@@ -34,6 +34,8 @@ def register(subparsers) -> None:
                    help="fit this structure to every stance and joint (e.g. k0,k1,b0) instead of choosing one per joint "
                         "for the recording from the per-stance F-tests")
     p.add_argument("--no-fit", action="store_true", help="skip the per-stance impedance fits (no 'fit' objects)")
+    p.add_argument("--per-leg", action="store_true",
+                   help="contract v2 recordings: analyse each leg on its own plate and markers (docs/contract_v2.md)")
     p.add_argument("--report", metavar="DIR",
                    help="write Table 2/3 layouts (CSV, Markdown, Wilcoxon tests) and PNG figures of the fits; "
                         "one condition per recording, labelled by its median hop frequency")
@@ -123,8 +125,10 @@ def run(args: argparse.Namespace) -> int:
     import sys
     from dataclasses import replace
 
+    from hop_impedance.bilateral import load_bilateral
     from hop_impedance.biomech.analysis import AnalysisOptions, analysis_to_json, analyze_recording
     from hop_impedance.biomech.body_model import load_overrides
+    from hop_impedance.biomech.per_leg import analyses_to_json, analyze_legs
     from hop_impedance.biomech.stance_detection import DetectorOptions
     from hop_impedance.cli.json_output import json_output
     from hop_impedance.impedance.report import fit_records, write_report
@@ -137,6 +141,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--max-gap-s must be >= 0, got {args.max_gap_s}")
     if args.report and args.no_fit:
         raise ValueError("--report needs the fits; drop --no-fit")
+    if args.report and args.per_leg:
+        raise ValueError("--report is for the lumped analysis; drop --per-leg or --report")
     options = AnalysisOptions(
         marker_cutoff_hz=args.cutoff_hz,
         force_cutoff_hz=args.cutoff_hz,
@@ -147,7 +153,8 @@ def run(args: argparse.Namespace) -> int:
     with json_output(args.json) as write_json:
         docs, records, conditions = [], [], []
         for path in args.recordings:
-            rec = load_recording(path)
+            bilateral = load_bilateral(path) if args.per_leg else None
+            rec = bilateral.recording if bilateral is not None else load_recording(path)
             rec = replace(rec, subject=_subject(rec, args, path))
             # The shared contract checks again with the subject in use and the cut-off (rates rule).
             checks = InputChecks(cutoff_hz=min(options.marker_cutoff_hz, options.force_cutoff_hz))
@@ -156,6 +163,11 @@ def run(args: argparse.Namespace) -> int:
             for warning in rec.warnings:
                 named = warning if warning.startswith(f"{os.path.basename(path)}:") else f"{path}: {warning}"
                 print(f"hop-impedance analyze: warning: {named}", file=sys.stderr)
+            if bilateral is not None:
+                terms = args.model_terms.split(",") if args.model_terms else None
+                fits = None if args.no_fit else (lambda d, a: add_fits_to_json(d, a, terms))
+                docs.append(analyses_to_json(analyze_legs(replace(bilateral, recording=rec), options), fits))
+                continue
             analysis = analyze_recording(rec, options)
             doc = analysis_to_json(analysis)
             if not args.no_fit:
