@@ -25,20 +25,30 @@ Counting
 (:func:`unique_gains`; mean over stances and one-sided Wilcoxon p). A hidden effect that the data tell apart
 from the other two keeps a positive, significant gain there; a gain <= 0 means the other two reproduce it.
 
+Three sources (issue 16): our simulator (``--cases``), the second generator
+(``--strict-cases``, :mod:`hop_impedance.validation.strict_generator`) and truth-labelled outside
+recordings (``--foreign DIR``). The table gives counts with two-sided 95 % Clopper-Pearson intervals and
+the number of named steps whose held-out forward gap did not shrink.
+
 Usage: .venv/bin/python bench/discovery_hit_rates.py [--seeds N] [--null-seeds N] [--hops N] [--cases a,b,...]
        [--sizes rate_fraction=0.25,...] [--freqs 2.2] [--unique-gains]
+       [--strict-cases null,angle_dependent_stiffness,... --strict-seeds N --strict-null-seeds N] [--foreign DIR]
 Prints one line per run and the table (markdown) at the end.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import time
+from dataclasses import replace
+from pathlib import Path
 
 from scipy.stats import binomtest
 
 import numpy as np
 
+from hop_impedance.io.recording_io import load_recording
 from hop_impedance.discovery.identify import EFFECT_SIGNALS, SIGNALS, identify
 from hop_impedance.discovery.measurement import measure_trial
 from hop_impedance.discovery.model import ModelSpec
@@ -47,6 +57,7 @@ from hop_impedance.discovery.workflow import discover
 from hop_impedance.simulation.scenarios import Effects
 from hop_impedance.simulation.sensors import SensorConfig
 from hop_impedance.simulation.stance_set import EffectSizes, simulate_stance_set_recording
+from hop_impedance.validation.strict_generator import StrictConfig, strict_recording
 
 BASE = dict(angle_dependent_stiffness=False, damping=False, push_off=False)
 FREQS = (1.53, 1.87, 2.2)
@@ -72,6 +83,14 @@ CASES = {
     "two:angle+offset": ({"angle_dependent_stiffness": True}, ("rigid",), {"force_offset_n": SENSOR_SIZES["force_offset_n"]},
                          {"angle_dependent_stiffness", "force_plate_offset"}),
     "two:push+soft": ({"push_off": True}, ("soft",), {}, {"active_push_off", "surface_compliance"}),
+}
+
+#: Second generator (hop_impedance.validation.strict_generator): strict family, lossless, time-symmetric.
+STRICT_CASES = {
+    "null": StrictConfig(),
+    "angle_dependent_stiffness": StrictConfig(angle_k1=3.0),
+    "force_plate_offset": StrictConfig(force_offset_n=30.0),
+    "stream_latency": StrictConfig(marker_latency_s=0.015),
 }
 
 
@@ -126,18 +145,23 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--null-seeds", type=int, default=20)
     ap.add_argument("--hops", type=int, default=8)
-    ap.add_argument("--cases", default=",".join(CASES))
+    ap.add_argument("--cases", default=",".join(CASES), help="simulator cases ('' for none)")
     ap.add_argument("--sizes", default="", help="EffectSizes overrides, e.g. rate_fraction=0.25,push_fraction=0.2")
     ap.add_argument("--unique-gains", action="store_true",
                     help="also print each late-stance look-alike's held-out gain over the other two")
+    ap.add_argument("--strict-cases", default="", help="second-generator cases, e.g. " + ",".join(STRICT_CASES))
+    ap.add_argument("--strict-seeds", type=int, default=5)
+    ap.add_argument("--strict-null-seeds", type=int, default=10)
+    ap.add_argument("--foreign", default="", help="also score the truth-labelled recordings in this folder "
+                                                  "(e.g. ../shared/foreign)")
     ap.add_argument("--freqs", default="", help="hop frequencies to cycle over (Hz), e.g. 2.2 (default: per case)")
     args = ap.parse_args()
     sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})
     freqs = tuple(float(f) for f in args.freqs.split(",") if f) or None
     rows = []
-    for name in args.cases.split(","):
+    for name in filter(None, args.cases.split(",")):
         expected = CASES[name][3]
-        tally = {"exact": 0, "named": 0, "named_or_ambiguous": 0, "extra": 0, "runs": 0, "gen_fail": 0}
+        tally = new_tally()
         for seed in range(args.null_seeds if name == "null" else args.seeds):
             try:
                 rec, freq = generate(name, seed, args.hops, sizes, freqs)
@@ -145,36 +169,93 @@ def main() -> None:
                 tally["gen_fail"] += 1
                 print(f"{name} seed {seed}: generation failed: {exc}", flush=True)
                 continue
-            t0 = time.perf_counter()
-            try:
-                doc = discover(rec, forward=False)
-            except ValueError as exc:
-                tally["runs"] += 1
-                print(f"{name} seed {seed}: discovery refused: {exc} (counted as a miss)", flush=True)
-                continue
-            flags = classify(expected, doc)
-            tally["runs"] += 1
-            for k in ("exact", "named", "named_or_ambiguous", "extra"):
-                tally[k] += flags[k]
-            print(f"{name:28s} seed {seed} f={freq} found={flags['found']} ambiguous={flags['ambiguous']} "
-                  f"{'EXACT' if flags['exact'] else 'MISS' if not flags['named'] else 'NAMED+EXTRA'} "
-                  f"{time.perf_counter() - t0:.1f}s", flush=True)
+            run_one(rec, f"{name:28s} seed {seed} f={freq}", expected, tally)
             if args.unique_gains:
                 print("    unique held-out gain over the other two look-alikes: " + "; ".join(
                     f"{e} {g:+.5f} (p {p:.3f})" for e, (g, p) in unique_gains(rec).items()), flush=True)
-        rows.append((name, tally))
-    print("\n| case | runs | exact | all hidden named | named or reported ambiguous | wrong extra name | generation failures |")
-    print("|---|---|---|---|---|---|---|")
-    for name, t in rows:
+        rows.append((("simulator", name), tally))
+    for name in filter(None, args.strict_cases.split(",")):
+        expected, tally = set(STRICT_CASES[name].effects), new_tally()
+        for seed in range(args.strict_null_seeds if name == "null" else args.strict_seeds):
+            try:
+                rec, _ = strict_recording(replace(STRICT_CASES[name], seed=seed, hops=args.hops))
+            except ValueError as exc:
+                tally["gen_fail"] += 1
+                print(f"strict {name} seed {seed}: generation failed: {exc}", flush=True)
+                continue
+            run_one(rec, f"strict {name:21s} seed {seed}", expected, tally)
+        rows.append((("second generator", name), tally))
+    if args.foreign:
+        rows += foreign_rows(args.foreign)
+    print_table(rows)
+
+
+def new_tally() -> dict:
+    return {"exact": 0, "named": 0, "named_or_ambiguous": 0, "extra": 0, "runs": 0, "gen_fail": 0,
+            "steps": 0, "steps_not_shrinking": 0}
+
+
+def run_one(rec, label: str, expected: set, tally: dict) -> None:
+    """Discover on one recording and add its flags to ``tally`` (a refusal counts as a miss)."""
+    t0 = time.perf_counter()
+    try:
+        doc = discover(rec)
+    except ValueError as exc:
+        tally["runs"] += 1
+        tally["extra"] += not expected  # a null that cannot be judged is not a correct "none"
+        print(f"{label}: discovery refused: {exc} (counted as a miss)", flush=True)
+        return
+    flags = classify(expected, doc)
+    tally["runs"] += 1
+    for k in ("exact", "named", "named_or_ambiguous", "extra"):
+        tally[k] += flags[k]
+    for st in doc["steps"]:
+        tally["steps"] += 1
+        tally["steps_not_shrinking"] += not st["gap_after"]["total"] < st["gap_before"]["total"]
+    print(f"{label} found={flags['found']} ambiguous={flags['ambiguous']} "
+          f"{'EXACT' if flags['exact'] else 'MISS' if not flags['named'] else 'NAMED+EXTRA'} "
+          f"{time.perf_counter() - t0:.1f}s", flush=True)
+
+
+def foreign_rows(folder: str) -> list:
+    """Tallies per hidden-effect set of the truth-labelled recordings (``*.mcap`` + ``*.truth.json``) in ``folder``."""
+    tallies: dict = {}
+    for path in sorted(Path(folder).glob("*.mcap")):
+        truth = json.loads(path.with_suffix(".truth.json").read_text())
+        expected = {e for e in truth["effects"] if e != "none"}
+        key = "null" if not expected else "+".join(sorted(expected))
+        tally = tallies.setdefault(key, new_tally())
+        try:
+            rec = load_recording(path)
+        except ValueError as exc:
+            tally["runs"] += 1
+            print(f"{path.name}: cannot load: {exc} (counted as a miss)", flush=True)
+            continue
+        run_one(rec, f"foreign {path.stem}", expected, tally)
+    return [(("foreign", k), t) for k, t in sorted(tallies.items())]
+
+
+def _ci(k: int, n: int) -> str:
+    ci = binomtest(k, n).proportion_ci(confidence_level=0.95, method="exact")
+    return f"[{100 * ci.low:.0f}, {100 * ci.high:.0f}] %"
+
+
+def print_table(rows: list) -> None:
+    """Markdown table (counts, share, two-sided 95 % Clopper-Pearson interval) and the null bounds."""
+    print("\n| source | case | runs | exact (95 % CI) | all hidden named | named or reported ambiguous "
+          "| wrong extra name (95 % CI) | steps whose gap did not shrink | generation failures |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for (source, name), t in rows:
         n = max(t["runs"], 1)
         pct = {k: f"{t[k]}/{t['runs']} ({100 * t[k] / n:.0f} %)" for k in ("exact", "named", "named_or_ambiguous", "extra")}
-        print(f"| {name} | {t['runs']} | {pct['exact']} | {pct['named']} | {pct['named_or_ambiguous']} | {pct['extra']} "
-              f"| {t['gen_fail']} |")
-    for name, t in rows:
+        print(f"| {source} | {name} | {t['runs']} | {pct['exact']} {_ci(t['exact'], n)} | {pct['named']} "
+              f"| {pct['named_or_ambiguous']} | {pct['extra']} {_ci(t['extra'], n)} "
+              f"| {t['steps_not_shrinking']}/{t['steps']} | {t['gen_fail']} |")
+    for (source, name), t in rows:
         if name == "null" and t["runs"]:
             ci = binomtest(t["extra"], t["runs"]).proportion_ci(confidence_level=0.95, method="exact")
             upper = binomtest(t["extra"], t["runs"], alternative="less").proportion_ci(0.95, "exact").high
-            print(f"\nnull: {t['extra']}/{t['runs']} false discoveries, 95 % Clopper-Pearson interval "
+            print(f"\n{source} null: {t['extra']}/{t['runs']} false discoveries, 95 % Clopper-Pearson interval "
                   f"[{100 * ci.low:.1f} %, {100 * ci.high:.1f} %] (two-sided), one-sided 95 % upper bound "
                   f"{100 * upper:.1f} %")
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
-from hop_impedance.discovery.identify import identify, surface_law
+from hop_impedance.discovery.identify import identify, surface_law, touchdown_moments
 from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial
 from hop_impedance.discovery.model import FittedLaw, ModelSpec
 from hop_impedance.simulation.ground import GroundLaw
@@ -45,7 +45,8 @@ def ground_of(spec: ModelSpec, s: MeasuredStance) -> GroundLaw:
 
 def simulate_measured_stance(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: MeasuredStance) -> dict:
     """Forward simulation of one measured stance; residual arrays per signal of :data:`GAP_SIGNALS`."""
-    return simulate_with_law(FittedLaw(spec, np.asarray(coefs, float)), ground_of(spec, s), spec.offset_n, trial, s)
+    law = FittedLaw(spec, np.asarray(coefs, float), touchdown_moments(spec, coefs, s))
+    return simulate_with_law(law, ground_of(spec, s), spec.offset_n, trial, s)
 
 
 def simulate_with_law(law: ImpedanceLaw, ground: GroundLaw, offset_n: float, trial: MeasuredTrial,

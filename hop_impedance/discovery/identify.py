@@ -66,7 +66,12 @@ def core(n: int) -> slice:
 
 
 def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance]) -> tuple[np.ndarray, float]:
-    """Pooled least-squares coefficients of the joint law.
+    """Pooled least-squares coefficients of the joint law, with a free touchdown moment per stance.
+
+    The baseline is ``M = M_td + K phi`` (the strict baseline of issue 16): the touchdown moment
+    ``M_td`` differs from stance to stance and is a nuisance, not an effect. It is absorbed by
+    demeaning regressors and moments per stance (the within-stance estimator); its value on any
+    stance is :func:`touchdown_moments`.
 
     Returns
     -------
@@ -78,8 +83,9 @@ def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance]) -> tuple[np.nd
     cores = [core(len(s.t_s)) for s in stances]
     coefs, sse = [], 0.0
     for j in range(3):
-        x = np.concatenate([f[j][c] for f, c in zip(feats, cores)])
-        y = np.concatenate([s.moment_nm[c, j] for s, c in zip(stances, cores)])
+        # per-stance touchdown moment M_td (nuisance): every stance demeaned on its core
+        x = np.concatenate([f[j][c] - f[j][c].mean(axis=0) for f, c in zip(feats, cores)])
+        y = np.concatenate([s.moment_nm[c, j] - s.moment_nm[c, j].mean() for s, c in zip(stances, cores)])
         c, *_ = lstsq(x, y, lapack_driver="gelsy")
         coefs.append(c)
         sse += float(np.sum((y - x @ c) ** 2))
@@ -260,13 +266,22 @@ def identify(spec: ModelSpec, trial: MeasuredTrial, stances: list[MeasuredStance
     return spec, coefs
 
 
+def touchdown_moments(spec: ModelSpec, coefs: np.ndarray, s: MeasuredStance) -> np.ndarray:
+    """Touchdown moment ``M_td`` per joint (N m, shape (3,)) of stance ``s`` under the law ``coefs``:
+    the mean ID-moment residual over the stance's core (the nuisance of :func:`fit_joint_law`)."""
+    feats = stance_features(spec, s.t_s, s.rho_rad, s.omega_rad_s)
+    keep = core(len(s.t_s))
+    return np.array([float(np.mean(s.moment_nm[keep, j] - feats[j][keep] @ coefs[j])) for j in range(3)])
+
+
 def residuals(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: MeasuredStance) -> dict[str, np.ndarray]:
     """One-step residual of every signal in :data:`SIGNALS` on one stance (units in the module docstring).
 
     Stance signals cover the stance without its first and last :data:`EDGE_FRACTION`.
     """
     feats = stance_features(spec, s.t_s, s.rho_rad, s.omega_rad_s)
-    out = {f"moment_{name}": s.moment_nm[:, j] - feats[j] @ coefs[j] for j, name in enumerate(JOINT_NAMES)}
+    m0 = touchdown_moments(spec, coefs, s)
+    out = {f"moment_{name}": s.moment_nm[:, j] - m0[j] - feats[j] @ coefs[j] for j, name in enumerate(JOINT_NAMES)}
     out["com"] = com_residual(trial, s, spec)
     keep = core(len(s.t_s))
     out = {k: v[keep] for k, v in out.items()}

@@ -181,10 +181,13 @@ class FittedLaw(ImpedanceLaw):
     spec : ModelSpec
     coefficients : ndarray, shape (3, n_features)
         Per joint (ankle, knee, hip), in :func:`feature_names` order (SI).
+    touchdown_moment_nm : ndarray, shape (3,)
+        ``M_td`` of the stance simulated (N m; nuisance, see ``identify.touchdown_moments``).
     """
 
     spec: ModelSpec
     coefficients: np.ndarray = field(default_factory=lambda: np.zeros((3, 1)))
+    touchdown_moment_nm: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     n_states = 3
 
@@ -193,8 +196,8 @@ class FittedLaw(ImpedanceLaw):
         dw = np.asarray(omega, float) - ref.omega0_rad_s
         s = np.asarray(states, float)
         t = np.broadcast_to(np.asarray(t_s, float), dr.shape[:-1])
-        return np.stack([features(self.spec, t, dr[..., j], dw[..., j], s[..., j]) @ self.coefficients[j]
-                         for j in range(3)], axis=-1)
+        return np.stack([self.touchdown_moment_nm[j] + features(self.spec, t, dr[..., j], dw[..., j], s[..., j])
+                         @ self.coefficients[j] for j in range(3)], axis=-1)
 
     def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102
         w = np.asarray(omega, float)

@@ -42,7 +42,7 @@ def gap_table(doc: dict) -> tuple[list[str], np.ndarray]:
 
 def write_figures(doc: dict, out_dir: str | Path) -> list[Path]:
     """``gap_per_step.png`` (relative RMS per signal, baseline and each step) and
-    ``selection.png`` (held-out gain of every candidate in each round). Returns the paths."""
+    ``selection.png`` (held-out forward-gap shrink of every candidate in each round). Returns the paths."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -68,10 +68,9 @@ def write_figures(doc: dict, out_dir: str | Path) -> list[Path]:
     fig, ax = plt.subplots(figsize=(9, 4))
     for r, scores in enumerate(rounds):
         names = list(scores)
-        ax.scatter(names, [max(scores[n]["mean_gain"], 1e-6) for n in names], label=f"round {r + 1}")
-    ax.axhline(doc["selection"]["min_gain"], color="k", ls="--", lw=1, label="min gain")
-    ax.set_yscale("log")
-    ax.set_ylabel("mean held-out gain")
+        ax.scatter(names, [max(scores[n]["held_out_shrink"], -1.0) for n in names], label=f"round {r + 1}")
+    ax.axhline(doc["selection"]["min_shrink"], color="k", ls="--", lw=1, label="min shrink")
+    ax.set_ylabel("held-out forward-gap shrink (share, clipped at -1)")
     ax.tick_params(axis="x", rotation=30)
     ax.legend(fontsize=8)
     fig.tight_layout()

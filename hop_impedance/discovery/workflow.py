@@ -5,15 +5,17 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 from scipy.integrate import trapezoid
 
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
-from hop_impedance.discovery.forward import held_out_forward_gap
+from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery.identify import SIGNALS, core, identify, residuals
 from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
 from hop_impedance.discovery.model import ModelSpec, feature_names
-from hop_impedance.discovery.selection import ambiguous_with, passes, remaining, score_candidates
+from hop_impedance.discovery.selection import remaining
 from hop_impedance.recording import Recording
 
 SCHEMA = "hop_impedance.discover/1"
@@ -121,82 +123,103 @@ def parameters_of(spec: ModelSpec, coefs: np.ndarray, effect: str | None) -> dic
     return out
 
 
-def discover(rec: Recording, *, forward: bool = True, max_steps: int = MAX_STEPS) -> dict:
+def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None = None) -> dict:
     """Name the effects the baseline model misses in a recording (see ``docs/discovery.md``).
+
+    The simulation decides (:mod:`hop_impedance.discovery.forward_selection`): every candidate is
+    identified on all stances but one and the held-out stance is simulated forward from its measured
+    touchdown state; an effect is named only if it significantly shrinks the held-out forward gap.
 
     Parameters
     ----------
     rec : Recording
         Contract recording (force plate, markers, subject).
-    forward : bool
-        Compute the forward-simulation gaps (baseline, per step, final). Off
-        for the hit-rate study (selection does not use them).
     max_steps : int
         Most effects added.
+    workers : int, optional
+        Processes for the held-out simulations (default: up to 2 cores).
 
     Returns
     -------
     dict
         ``schema``, ``baseline_gap``, ``steps``, ``final_gap``,
-        ``effects_found``, ``stances`` (used / rejected), ``selection``.
+        ``effects_found``, ``stances`` (used / rejected), ``selection``, ``timing``.
     """
+    t_start = time.perf_counter()
     trial = measure_trial(rec)
+    if len(trial.stances) < fs.MIN_STANCES:
+        raise ValueError(f"discovery needs at least {fs.MIN_STANCES} usable stances for held-out testing, "
+                         f"got {len(trial.stances)}")
     spec = ModelSpec()
     spec_fit, coefs = identify(spec, trial, trial.stances)
-    baseline_gap = held_out_forward_gap(spec, trial)[0] if forward else None
-    doc = {
-        "schema": SCHEMA,
-        "baseline": {"model": "constant joint stiffness k0 (M = k0 (rho - rho0)), no damping, rigid ground, "
-                              "streams in sync, no active moment",
-                     "parameters": parameters_of(spec_fit, coefs, None),
-                     "evidence": residual_evidence(spec_fit, coefs, trial)},
-        "baseline_gap": baseline_gap,
-        "steps": [],
-        "stances": {"used": [s.index for s in trial.stances], "rejected": trial.rejected},
-        "selection": {"alpha": None, "min_gain": None, "rounds": []},
-    }
-    from hop_impedance.discovery import selection as sel
-
-    doc["selection"]["alpha"], doc["selection"]["min_gain"] = sel.ALPHA, sel.MIN_GAIN
-    gap = baseline_gap
-    for _ in range(max_steps):
-        cands = remaining(spec)
-        if not cands:
-            break
-        scores = score_candidates(spec, trial, cands)
-        doc["selection"]["rounds"].append({sc.effect: {"mean_gain": sc.mean_gain, "p_value": sc.p_value,
-                                                       "passes": passes(sc, len(cands))} for sc in scores})
-        ok = [sc for sc in scores if passes(sc, len(cands))]
-        if not ok:
-            break
-        best = max(ok, key=lambda sc: sc.mean_gain)
-        evidence = residual_evidence(spec_fit, coefs, trial)
-        spec, _ = identify(spec, trial, trial.stances, best.effect)
-        if best.effect == "stream_latency":
-            trial = measure_trial(rec, marker_latency_s=spec.latency_s)
-        spec_fit, coefs = identify(spec, trial, trial.stances)
-        new_gap = held_out_forward_gap(spec, trial)[0] if forward else None
-        amb = ambiguous_with(best, scores, len(cands))
-        for a in amb:
-            a["separating_evidence"] = SEPARATING_EVIDENCE.get(frozenset({best.effect, a["effect"]}),
-                                                               "no specific separating evidence in this recording")
-        doc["steps"].append({
-            "effect": best.effect,
-            "evidence": {"held_out_gain": best.mean_gain, "held_out_gain_per_signal": best.signal_gains,
-                         "per_stance_gains": best.gains.round(4).tolist(), "residuals_before": evidence},
-            "parameters": parameters_of(spec, coefs, best.effect),
-            "p_value": best.p_value,
-            "p_value_threshold": sel.ALPHA / len(cands),
-            "ambiguous_with": amb,
-            "gap_before": gap,
-            "gap_after": new_gap,
-        })
-        gap = new_gap
-    doc["final_gap"] = gap
+    timing = {"per_candidate_s": {}, "rounds": []}
+    with fs.HeldOutEvaluator(rec, trial, workers) as ev:
+        current = ev.run(spec, [None])[0]
+        timing["baseline_s"] = current.seconds
+        scales = ev.scales
+        doc = {
+            "schema": SCHEMA,
+            "baseline": {"model": "constant joint stiffness with a free touchdown moment per stance "
+                                  "(M = M_td + k0 (rho - rho0)), no damping, rigid ground, streams in sync, "
+                                  "no active moment",
+                         "parameters": parameters_of(spec_fit, coefs, None),
+                         "evidence": residual_evidence(spec_fit, coefs, trial)},
+            "baseline_gap": current.figures(scales),
+            "steps": [],
+            "stances": {"used": [s.index for s in trial.stances], "rejected": trial.rejected},
+            "selection": {"method": "leave-one-stance-out forward simulation; one-sided t-test of per-stance "
+                                    "log gap ratios, Bonferroni over the step's candidates",
+                          "alpha": fs.ALPHA, "min_shrink": fs.MIN_SHRINK, "gap_scales": scales.tolist(),
+                          "rounds": []},
+        }
+        for _ in range(max_steps):
+            cands = remaining(spec)
+            if not cands:
+                break
+            t0 = time.perf_counter()
+            runs = ev.run(spec, list(cands))
+            timing["rounds"].append(time.perf_counter() - t0)
+            for r in runs:
+                timing["per_candidate_s"].setdefault(r.effect, []).append(r.seconds)
+            scores = fs.score(trial, current, runs)
+            doc["selection"]["rounds"].append({sc.effect: {
+                "held_out_shrink": sc.shrink, "mean_log_gap_ratio": sc.mean_log_ratio, "p_value": sc.p_value,
+                "passes": fs.passes(sc, len(cands)), "per_stance_log_gap_ratio": np.round(sc.log_ratios, 4).tolist(),
+                "gap_after": sc.runs.figures(scales)["total"], "physics": sc.physics} for sc in scores})
+            ok = [sc for sc in scores if fs.passes(sc, len(cands))]
+            if not ok:
+                break
+            best = max(ok, key=lambda sc: sc.mean_log_ratio)
+            evidence = residual_evidence(spec_fit, coefs, trial)
+            spec = best.runs.spec
+            if best.effect == "stream_latency":
+                trial = measure_trial(rec, marker_latency_s=spec.latency_s)
+            spec_fit, coefs = identify(spec, trial, trial.stances)
+            amb = fs.ambiguous_with(best, scores)
+            for a in amb:
+                a["separating_evidence"] = SEPARATING_EVIDENCE.get(frozenset({best.effect, a["effect"]}),
+                                                                   "no specific separating evidence in this recording")
+            doc["steps"].append({
+                "effect": best.effect,
+                "evidence": {"held_out_shrink": best.shrink, "mean_log_gap_ratio": best.mean_log_ratio,
+                             "per_stance_log_gap_ratio": np.round(best.log_ratios, 4).tolist(),
+                             "physics": best.physics, "residuals_before": evidence},
+                "parameters": parameters_of(spec, coefs, best.effect),
+                "p_value": best.p_value,
+                "p_value_threshold": fs.ALPHA / len(cands),
+                "ambiguous_with": amb,
+                "gap_before": current.figures(scales),
+                "gap_after": best.runs.figures(scales),
+            })
+            current = best.runs
+    doc["final_gap"] = current.figures(scales)
     doc["effects_found"] = [st["effect"] for st in doc["steps"]]
     doc["final_model"] = {"effects": list(spec.effects), "parameters": parameters_of(spec_fit, coefs, None),
                           "latency_s": spec.latency_s, "offset_n": spec.offset_n,
                           "compliance": list(spec.compliance) if spec.compliance else None,
                           "stiff_compliance": list(spec.stiff_compliance) if spec.stiff_compliance else None,
                           "surface_split": spec.surface_split}
+    timing["per_candidate_s"] = {k: float(np.mean(v)) for k, v in timing["per_candidate_s"].items()}
+    timing["total_s"] = time.perf_counter() - t_start
+    doc["timing"] = timing
     return doc

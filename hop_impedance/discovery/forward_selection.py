@@ -1,0 +1,384 @@
+"""Selection by the held-out forward gap: the simulation decides (issue 16).
+
+For the current model and for every candidate (current model + one effect):
+
+1. leave-one-stance-out: the model is identified on all stances but one
+   (:func:`hop_impedance.discovery.identify.identify`, regression on the ID
+   moments and the sensor/ground signals);
+2. the held-out stance is simulated forward with
+   :func:`hop_impedance.simulation.stance.simulate_stance` from its measured
+   touchdown state with that model, and compared sample by sample with the
+   raw plate Fz, the joint angles and the ID moments, plus its duration;
+3. per held-out stance ``i`` the forward gap is one number
+   ``G_i = mean_s (e_is / scale_s)^2`` over 10 terms with fixed per-recording scales
+   (:func:`gap_scales`): the RMS of the 7 signals (GRF, 3 angles, 3 moments; scale = mean per-stance
+   range of the measured signal), the stance duration error (10 % of the mean stance time), the net
+   joint work error (the work the joints absorb in a measured stance: energy balance) and the mean
+   raw plate force of the flight before the stance minus the model's offset (0.1 body weight: the
+   model predicts zero force in flight);
+4. a candidate passes when the per-stance log gap ratios
+   ``d_i = log G_cur_i - log G_cand_i`` are significantly > 0 (one-sided
+   one-sample t-test over the held-out stances, Bonferroni over the candidates
+   of the step), the pooled held-out gap shrinks by at least :data:`MIN_SHRINK`,
+   and the physics admits it (:func:`admissible`). Choice: a t-test on log
+   ratios, not Wilcoxon: with 6 stances (the outside recordings) the exact
+   Wilcoxon cannot go below 1/64 = 0.016 > 0.05/8, i.e. nothing could ever be named.
+
+The passing candidate with the largest mean ``d`` is added; its held-out runs are
+the next step's "current" runs, so every reported step's ``gap_after`` is below its
+``gap_before`` by construction (the same held-out simulations decided it).
+
+Nuisances absorbed, never named: the per-stance touchdown moment ``M_td``
+(the strict baseline ``M = M_td + K phi``; estimated per stance as the mean
+ID-moment residual of that stance, also on the held-out stance: it is part
+of the measured touchdown state) and body-segment parameters that differ
+from the de Leva tables (the identification works on the measured ID moments
+of the analysis' own body model, nothing is fitted to segment masses).
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+
+import multiprocessing as mp
+import numpy as np
+from scipy import stats
+from scipy.integrate import trapezoid
+
+from hop_impedance.biomech.joint_angles import JOINT_NAMES
+from hop_impedance.discovery.forward import GAP_SIGNALS, ground_of
+from hop_impedance.discovery.identify import identify, touchdown_moments
+from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial, measure_trial, weight_n
+from hop_impedance.discovery.model import FittedLaw, ModelSpec
+from hop_impedance.recording import Recording
+from hop_impedance.simulation.stance import simulate_stance
+
+ALPHA = 0.05
+#: Fewest usable stances for held-out testing.
+MIN_STANCES = 5
+#: Smallest pooled held-out gap shrink a named effect must bring (share of the current gap).
+MIN_SHRINK = 0.10
+#: Duration scale: share of the mean measured stance time.
+DURATION_SCALE = 0.10
+#: Forward-integration tolerances of the held-out stances (the measured noise is far above them).
+RTOL, ATOL = 1e-5, 1e-7
+#: Net-joint-work scale: share of the work the joints absorb per measured stance.
+WORK_SCALE = 1.0
+#: Flight-force scale: share of body weight (the mean raw force of the flight before each stance).
+FLIGHT_SCALE_BW = 0.1
+#: Significance of the measured net joint work per stance (push-off admissibility).
+WORK_ALPHA = 0.05
+#: Fewest usable stances for held-out testing.
+MIN_STANCES = 5
+
+_CONTEXT: dict = {}
+
+
+@dataclass
+class HeldOutRuns:
+    """Leave-one-stance-out forward runs of one model.
+
+    Attributes
+    ----------
+    effect : str or None
+        Candidate added (None: the current model itself).
+    spec : ModelSpec
+        Model fitted on all stances (for reporting).
+    gaps : ndarray, shape (n,)
+        Per held-out stance gap ``G_i``.
+    rms : ndarray, shape (n, 7)
+        Per stance residual RMS per signal of :data:`GAP_SIGNALS`.
+    duration_error_s : ndarray, shape (n,)
+    net_work_j : ndarray, shape (n,)
+        Simulated net joint work per stance (J, all joints).
+    end_reasons : list of str
+    seconds : float
+        CPU-side wall time spent on this model's runs (s).
+    """
+
+    effect: str | None
+    spec: ModelSpec
+    gaps: np.ndarray
+    rms: np.ndarray
+    duration_error_s: np.ndarray
+    net_work_j: np.ndarray
+    end_reasons: list
+    seconds: float = 0.0
+
+    def figures(self, scales: np.ndarray) -> dict:
+        """Pooled held-out gap: ``total`` (mean G_i, first key) then per-signal RMS (and RMS / scale) and duration."""
+        out = {"total": float(np.mean(self.gaps))}
+        for k, sig in enumerate(GAP_SIGNALS):
+            rms = float(np.sqrt(np.nanmean(self.rms[:, k] ** 2)))
+            out[sig] = {"rms": rms, "relative_rms": rms / float(scales[k])}
+        d = self.duration_error_s[np.isfinite(self.duration_error_s)]
+        out["duration_error_rms_s"] = float(np.sqrt(np.mean(d**2))) if d.size else None
+        out["stances_not_taking_off"] = int(sum(r != "take_off" for r in self.end_reasons))
+        return out
+
+
+def measured_net_work_j(s: MeasuredStance) -> float:
+    """Net joint work of one measured stance (J, all joints): ``int -M omega dt`` (flexion-positive angles)."""
+    return float(np.sum(trapezoid(-s.moment_nm * s.omega_rad_s, s.t_s, axis=0)))
+
+
+def gap_scales(trial: MeasuredTrial) -> np.ndarray:
+    """Scales of :data:`GAP_SIGNALS` (mean per-stance range) and of the duration (10 % of mean stance time)."""
+    out = [np.mean([np.ptp(s.fz_raw_n) for s in trial.stances])]
+    for kind in ("rho_rad", "moment_nm"):
+        for j in range(3):
+            out.append(np.mean([np.ptp(getattr(s, kind)[:, j]) for s in trial.stances]))
+    # GAP_SIGNALS order: grf, angles (3), moments (3); then duration and net joint work
+    absorbed = np.mean([measured_absorbed_work_j(s) for s in trial.stances])
+    return np.array(out + [DURATION_SCALE * np.mean([s.t_s[-1] for s in trial.stances]), WORK_SCALE * absorbed,
+                           FLIGHT_SCALE_BW * weight_n(trial)])
+
+
+def measured_absorbed_work_j(s: MeasuredStance) -> float:
+    """Work the joints absorb in one measured stance (J, all joints, > 0): ``int max(M omega, 0) dt``."""
+    return float(np.sum(trapezoid(np.maximum(s.moment_nm * s.omega_rad_s, 0.0), s.t_s, axis=0)))
+
+
+def _trial_for(spec: ModelSpec) -> MeasuredTrial:
+    """The measured trial with the model's marker latency removed (re-measured once per latency)."""
+    trial = _CONTEXT["trial"]
+    if abs(spec.latency_s - trial.marker_latency_s) < 1e-6:
+        return trial
+    key = round(spec.latency_s, 6)
+    cache = _CONTEXT.setdefault("latency_cache", {})
+    if key not in cache:
+        cache[key] = measure_trial(_CONTEXT["rec"], marker_latency_s=spec.latency_s)
+    return cache[key]
+
+
+def _stance_by_index(trial: MeasuredTrial, index: int) -> MeasuredStance | None:
+    return next((s for s in trial.stances if s.index == index), None)
+
+
+def simulate_held_out(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: MeasuredStance,
+                      scales: np.ndarray) -> dict:
+    """Forward-simulate stance ``s`` with the identified model; gap figures of that stance."""
+    m0 = touchdown_moments(spec, coefs, s)
+    law = FittedLaw(spec, np.asarray(coefs, float), m0)
+    t_max = 1.5 * float(s.t_s[-1]) + 0.05
+    try:
+        sim = simulate_stance(trial.chain, law, ground_of(spec, s), s.touchdown, t_max_s=t_max,
+                              rtol=RTOL, atol=ATOL, sample_times_s=s.t_s)
+    except RuntimeError as exc:
+        return {"gap": np.inf, "rms": np.full(7, np.nan), "duration_error_s": np.nan, "net_work_j": np.nan,
+                "end_reason": f"failed: {exc}"}
+    return _gap_of(sim, s, spec.offset_n, scales)
+
+
+def _gap_of(sim, s: MeasuredStance, offset_n: float, scales: np.ndarray) -> dict:
+    """Gap figures of one simulated stance against the measured one (see module docstring)."""
+    n = len(sim.t_s)
+    res = [s.fz_raw_n[:n] - (sim.grf_n[:, 1] + offset_n)]
+    res += [s.rho_rad[:n, j] - sim.rho_rad[:, j] for j in range(3)]
+    res += [s.moment_nm[:n, j] - sim.moments_nm[:, j] for j in range(3)]
+    rms = np.array([np.sqrt(np.mean(r**2)) for r in res])
+    duration_error = float(sim.duration_s - s.t_s[-1])
+    work = float(np.sum(trapezoid(-sim.moments_nm * sim.omega_rad_s, sim.t_s, axis=0))) if n > 1 else np.nan
+    work_error = work - measured_net_work_j(s)
+    # the flight before the stance: the model predicts zero force there (plus its plate offset)
+    flight = float(np.mean(s.flight_fz_n) - offset_n) if s.flight_fz_n.size else 0.0
+    terms = np.r_[(rms / scales[:7]) ** 2, (duration_error / scales[7]) ** 2, (work_error / scales[8]) ** 2,
+                  (flight / scales[9]) ** 2]
+    return {"gap": float(np.mean(terms)), "rms": rms, "duration_error_s": duration_error, "net_work_j": work,
+            "end_reason": sim.end_reason}
+
+
+def _run_one(task: tuple) -> dict:
+    """Identify on all stances but ``index`` (with ``effect`` added), simulate stance ``index``."""
+    spec, effect, index = task
+    trial = _trial_for(spec)
+    train = [s for s in trial.stances if s.index != index]
+    fitted, _ = identify(spec, trial, train, effect)
+    measured = _trial_for(fitted)
+    train = [s for s in measured.stances if s.index != index]
+    fitted, coefs = identify(fitted, measured, train)
+    s = _stance_by_index(measured, index)
+    if s is None:  # the stance is not usable once re-measured: compare nothing, count as failed
+        return {"gap": np.inf, "rms": np.full(7, np.nan), "duration_error_s": np.nan, "net_work_j": np.nan,
+                "end_reason": "stance lost when re-measured"}
+    return simulate_held_out(fitted, coefs, measured, s, _CONTEXT["scales"])
+
+
+class HeldOutEvaluator:
+    """Runs leave-one-stance-out forward simulations of models on one recording, on all cores.
+
+    The process pool is forked after the recording is measured, so the workers
+    share it without pickling; tasks are ``(spec, effect, stance index)``.
+    """
+
+    def __init__(self, rec: Recording, trial: MeasuredTrial, workers: int | None = None):
+        _CONTEXT.clear()
+        _CONTEXT.update(rec=rec, trial=trial, scales=gap_scales(trial))
+        self.trial = trial
+        self.scales = _CONTEXT["scales"]
+        self.workers = workers or min(os.cpu_count() or 1, 2)
+        self._pool = None
+        if self.workers > 1 and "fork" in mp.get_all_start_methods():
+            self._pool = ProcessPoolExecutor(self.workers, mp_context=mp.get_context("fork"))
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def run(self, spec: ModelSpec, effects: list) -> list[HeldOutRuns]:
+        """Held-out runs of ``spec`` with each of ``effects`` added (None = ``spec`` itself)."""
+        import time
+
+        idx = [s.index for s in self.trial.stances]
+        tasks = [(spec, e, i) for e in effects for i in idx]
+        t0 = time.perf_counter()
+        results = list(self._pool.map(_run_one, tasks, chunksize=1)) if self._pool else [_run_one(t) for t in tasks]
+        wall = time.perf_counter() - t0
+        out = []
+        for k, e in enumerate(effects):
+            rs = results[k * len(idx):(k + 1) * len(idx)]
+            fitted, _ = identify(spec, _trial_for(spec), _trial_for(spec).stances, e)
+            out.append(HeldOutRuns(
+                effect=e, spec=fitted, gaps=np.array([r["gap"] for r in rs]), rms=np.array([r["rms"] for r in rs]),
+                duration_error_s=np.array([r["duration_error_s"] for r in rs]),
+                net_work_j=np.array([r["net_work_j"] for r in rs]), end_reasons=[r["end_reason"] for r in rs],
+                seconds=wall / len(effects)))
+        return out
+
+
+@dataclass
+class ForwardScore:
+    """Held-out forward comparison of one candidate against the current model."""
+
+    effect: str
+    runs: HeldOutRuns
+    log_ratios: np.ndarray
+    mean_log_ratio: float
+    shrink: float
+    p_value: float
+    admissible: bool
+    physics: dict
+
+
+def _one_sided_t(d: np.ndarray) -> float:
+    d = np.asarray(d, float)
+    if not np.all(np.isfinite(d)):
+        # a stance that failed to simulate: treat as a loss of that side (+/- large), keep the test finite
+        d = np.clip(np.nan_to_num(d, nan=0.0, posinf=10.0, neginf=-10.0), -10.0, 10.0)
+    if np.allclose(d, d[0]):
+        return 0.0 if d[0] > 0 else 1.0
+    return float(stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)
+
+
+def physics_evidence(trial: MeasuredTrial, current: HeldOutRuns, cand: HeldOutRuns) -> dict:
+    """Energy balance, stance-to-stance variation, flight force and latency of one candidate."""
+    w_meas = np.array([measured_net_work_j(s) for s in trial.stances])
+    n = len(w_meas)
+    se = float(np.std(w_meas, ddof=1) / np.sqrt(n)) if n > 1 else float("nan")
+    flight = np.concatenate([s.flight_fz_n for s in trial.stances])
+    spec = cand.spec
+    return {
+        "measured_net_joint_work_j": {"mean": float(w_meas.mean()), "se": se, "per_stance": w_meas.round(2).tolist(),
+                                      "p_positive": _one_sided_t(w_meas)},
+        "simulated_net_joint_work_j": {"mean": float(np.nanmean(cand.net_work_j)),
+                                       "per_stance": np.round(cand.net_work_j, 2).tolist()},
+        "work_mismatch_j": {"candidate": float(np.nanmean(np.abs(cand.net_work_j - w_meas))),
+                            "current": float(np.nanmean(np.abs(current.net_work_j - w_meas)))},
+        "per_stance_gap_current": np.round(current.gaps, 5).tolist(),
+        "per_stance_gap_candidate": np.round(cand.gaps, 5).tolist(),
+        "stance_to_stance_cv_of_gap_ratio": float(np.std(cand.gaps / current.gaps) / np.mean(cand.gaps / current.gaps))
+        if np.all(np.isfinite(cand.gaps / current.gaps)) else None,
+        "flight_force_n": {"mean": float(flight.mean()) if flight.size else None,
+                           "se": float(flight.std() / np.sqrt(flight.size)) if flight.size > 1 else None,
+                           "weight_share": float(flight.mean() / weight_n(trial)) if flight.size else None},
+        "fitted_offset_n": spec.offset_n,
+        "fitted_latency_s": spec.latency_s,
+    }
+
+
+def admissible(effect: str, physics: dict) -> tuple[bool, str]:
+    """Physics that an effect must agree with to be named.
+
+    - ``active_push_off`` adds net positive joint work: the measured stances must show net positive joint
+      work (one-sided t-test over stances, p < :data:`WORK_ALPHA`); a lossless recording has none.
+    - ``joint_damping`` and ``active_push_off`` change the stance's energy: they must bring the simulated
+      net joint work closer to the measured one (mean per-stance |W_sim - W_meas| smaller than the
+      current model's). Measured reason: on nulls of our own simulator (elastic joints, lossy rigid
+      ground) the stances end with energy still in the joint springs (net joint work about -2.6 J); damping
+      shrank the forward gap there by 21 % while moving the simulated work away from the measured one.
+    """
+    if effect == "active_push_off":
+        p = physics["measured_net_joint_work_j"]["p_positive"]
+        if not p < WORK_ALPHA:
+            return False, (f"measured net joint work per stance {physics['measured_net_joint_work_j']['mean']:.1f} J "
+                           f"is not positive (p = {p:.2f}): no energy for a push-off to add")
+    if effect in ("joint_damping", "active_push_off"):
+        mis = physics["work_mismatch_j"]
+        if not mis["candidate"] < mis["current"]:
+            return False, (f"does not improve the energy balance: net-work mismatch {mis['candidate']:.2f} J "
+                           f"vs {mis['current']:.2f} J without it")
+    return True, ""
+
+
+def score(trial: MeasuredTrial, current: HeldOutRuns, cands: list[HeldOutRuns]) -> list[ForwardScore]:
+    """Compare every candidate's held-out forward runs with the current model's (module docstring)."""
+    out = []
+    for c in cands:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d = np.log(current.gaps) - np.log(c.gaps)
+        phys = physics_evidence(trial, current, c)
+        ok, why = admissible(c.effect, phys)
+        phys["admissible"], phys["inadmissible_because"] = ok, why or None
+        shrink = 1.0 - float(np.mean(c.gaps) / np.mean(current.gaps))
+        out.append(ForwardScore(c.effect, c, d, float(np.mean(np.clip(np.nan_to_num(d, nan=0.0), -10, 10))),
+                                shrink, _one_sided_t(d), ok, phys))
+    return out
+
+
+def passes(sc: ForwardScore, n_candidates: int) -> bool:
+    """Significant (Bonferroni), relevant (pooled shrink >= MIN_SHRINK) and physically admissible."""
+    return sc.p_value < ALPHA / max(n_candidates, 1) and sc.shrink >= MIN_SHRINK and sc.admissible
+
+
+def ambiguous_with(best: ForwardScore, scores: list[ForwardScore]) -> list[dict]:
+    """Candidates that shrink the held-out gap credibly (p < ALPHA uncorrected, shrink >= MIN_SHRINK) and
+    whose per-stance log ratios are not significantly below the winner's (paired one-sided t-test p > ALPHA)."""
+    out = []
+    for sc in scores:
+        if sc.effect == best.effect or sc.p_value >= ALPHA or sc.shrink < MIN_SHRINK:
+            continue
+        p = _one_sided_t(best.log_ratios - sc.log_ratios)
+        if p > ALPHA:
+            out.append({"effect": sc.effect, "held_out_shrink": sc.shrink, "p_value": sc.p_value,
+                        "p_value_difference": p, "admissible": sc.admissible})
+    return out
+
+
+
+def law_gaps(trial: MeasuredTrial, laws: list, grounds: list, offset_n: float = 0.0) -> np.ndarray:
+    """Per-stance gap ``G_i`` of given laws (e.g. the truth), simulated exactly like a candidate.
+
+    ``laws[i]``/``grounds[i]`` (ImpedanceLaw, GroundLaw) drive stance ``trial.stances[i]``; nothing is
+    identified. With the law that generated a recording this is the gap of the true model, the floor
+    a named model's final gap is compared with.
+    """
+    scales = gap_scales(trial)
+    out = []
+    for law, ground, s in zip(laws, grounds, trial.stances):
+        try:
+            sim = simulate_stance(trial.chain, law, ground, s.touchdown, t_max_s=1.5 * float(s.t_s[-1]) + 0.05,
+                                  rtol=RTOL, atol=ATOL, sample_times_s=s.t_s)
+        except RuntimeError:
+            out.append(np.inf)
+            continue
+        out.append(_gap_of(sim, s, offset_n, scales)["gap"])
+    return np.array(out)

@@ -1,0 +1,76 @@
+"""The second generator (hop_impedance.validation.strict_generator): independent, lossless, time-symmetric.
+
+Checked against physics, not against our simulator: it must import nothing from
+``hop_impedance.simulation`` or ``hop_impedance.discovery``; the sympy-derived equations of motion must
+conserve the total mechanical energy of a stance (a wrong mass matrix or velocity term would not);
+stances are mirror images about mid-stance; the recording passes our analysis with the hops it holds.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hop_impedance.validation.strict_generator import StrictConfig, strict_recording
+from hop_impedance.validation.strict_generator.generator import _stance, _stance_state, perturbed_body
+
+PACKAGE = Path(__file__).resolve().parents[2] / "hop_impedance" / "validation" / "strict_generator"
+_CACHE: dict = {}
+
+
+def test_generator_imports_nothing_from_the_simulator_or_the_discovery():
+    imported = set()
+    for path in PACKAGE.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                imported.add(node.module)
+            elif isinstance(node, ast.Import):
+                imported.update(a.name for a in node.names)
+    assert imported, "no imports parsed"
+    bad = {m for m in imported if m.startswith(("hop_impedance.simulation", "hop_impedance.discovery"))}
+    assert not bad, bad
+
+
+def _one_stance():
+    if "stance" not in _CACHE:
+        rng = np.random.default_rng(3)
+        _CACHE["stance"] = _stance(perturbed_body(60.0, 1.65, rng), rng, StrictConfig())
+    return _CACHE["stance"]
+
+
+def test_stance_conserves_mechanical_energy():
+    """Kinetic + gravity + ground + joint-spring energy constant through stance (relative change < 1e-6 of the
+    ~600 J total; the kinetic energy at touchdown alone is ~40 J)."""
+    st = _one_stance()
+    model = st["model"]
+    t = np.linspace(0.0, 2 * st["half_s"], 41)
+    e = np.array([model.energy_j(*_stance_state(st, tt)) for tt in t])
+    q_td, qd_td = _stance_state(st, 0.0)
+    kinetic_td = 0.5 * qd_td @ np.asarray(model.f_m(q_td, qd_td), float) @ qd_td
+    assert kinetic_td > 10.0
+    assert np.ptp(e) < 1e-6 * abs(e.mean())
+
+
+def test_stance_is_time_symmetric():
+    st = _one_stance()
+    t = np.linspace(0.0, st["half_s"], 11)
+    for tt in t:
+        q1, qd1 = _stance_state(st, st["half_s"] - tt)
+        q2, qd2 = _stance_state(st, st["half_s"] + tt)
+        assert q1 == pytest.approx(q2, abs=1e-9) and qd1 == pytest.approx(-qd2, abs=1e-9)
+
+
+def test_strict_recording_passes_the_analysis_with_every_hop_and_no_net_joint_work():
+    from hop_impedance.discovery.forward_selection import measured_net_work_j
+    from hop_impedance.discovery.measurement import measure_trial
+
+    rec, truth = strict_recording(StrictConfig(hops=6, seed=5))
+    trial = measure_trial(rec)
+    assert len(trial.stances) == 6 and truth["effects"] == ["none"]
+    tds = [h["t_td"] for h in truth["per_hop"]]
+    assert [s.touchdown_s for s in trial.stances] == pytest.approx(tds, abs=0.005)
+    w = np.array([measured_net_work_j(s) for s in trial.stances])
+    assert abs(w.mean()) < 1.0
