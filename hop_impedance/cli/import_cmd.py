@@ -47,6 +47,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "qualisys_isb_right, qualisys_isb_left, contract) or a YAML file (virtual markers: docs/importing.md); "
         "default: the first shipped mapping whose six markers are all present",
     )
+    p.add_argument("--both-legs", action="store_true",
+                   help="contract v2 (docs/contract_v2.md): keep each foot's plate and the left leg too "
+                        "(--markers names the right-leg map; its _left twin is used for the left leg)")
     p.add_argument("--up", default=None, help="lab axis pointing up, e.g. +Z or +Y (default: from the file / detected)")
     p.add_argument(
         "--forward", default=None, help="lab axis the subject faces, e.g. +X or --forward=-Y (default: detected from the markers)"
@@ -79,6 +82,16 @@ def import_from_args(args: argparse.Namespace):
 
         mass = None if args.mass_kg == "auto" else args.mass_kg
         return import_force_only(args.force_txt, mass_kg=mass, height_m=args.height_m, rate_hz=args.rate_hz, sex=args.sex)
+    if getattr(args, "both_legs", False):
+        from hop_impedance.importers.bilateral_import import import_c3d_bilateral, import_opensim_bilateral
+
+        if args.mot is not None:
+            if args.trc is None:
+                raise ValueError("--both-legs needs markers (--trc) to tell the feet's plates apart")
+            return import_opensim_bilateral(args.trc, args.mot, args.markers, plates=args.plates, **options)
+        if args.session is None:
+            raise ValueError("--both-legs needs markers and plates: a .c3d session or --trc/--mot")
+        return import_c3d_bilateral(args.session, args.markers, plates=args.plates, **options)
     if args.mot is not None:
         from hop_impedance.importers.opensim_import import import_opensim
 
@@ -107,9 +120,14 @@ def summary(recording) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     """Import, write the recording, print what was done; errors become one line (exit 2)."""
     recording = import_from_args(args)
+    from hop_impedance.bilateral import BilateralRecording, save_bilateral
     from hop_impedance.io.recording_io import save_recording
 
-    save_recording(args.out, recording)
+    if isinstance(recording, BilateralRecording):
+        save_bilateral(args.out, recording)
+        recording = recording.recording
+    else:
+        save_recording(args.out, recording)
     for line in summary(recording):
         print(line)
     print(f"wrote {args.out}")

@@ -106,12 +106,33 @@ def session_to_bilateral(
     return BilateralRecording(rec, plates, left_markers)
 
 
-def import_opensim_bilateral(
-    trc_path: str | Path, mot_path: str | Path, right: str = "opencap_right", left: str = "opencap_left", **options
-) -> BilateralRecording:
-    """Contract v2 recording from an OpenSim TRC + GRF MOT pair with one plate per foot."""
-    from hop_impedance.importers.marker_mapping import load_marker_mapping
+def bilateral_from_session(session: LabSession, markers=None, **options) -> BilateralRecording:
+    """:func:`session_to_bilateral` with the right map chosen as the v1 import does and its ``_left`` twin.
+
+    ``markers``: a shipped map name or YAML path or :class:`MarkerMapping` for
+    the right leg (default: the first shipped map whose markers are all
+    present); its name must end in ``_right`` and a shipped ``..._left`` map
+    must exist (opencap, plugin_gait, qualisys_isb).
+    """
+    from hop_impedance.importers.marker_mapping import choose_mapping, load_marker_mapping
+
+    if session.marker_positions_m is None:
+        raise ValueError(f"{session.source or 'session'}: per-leg import needs markers (to tell the feet's plates apart)")
+    right = choose_mapping(session.marker_labels, markers)
+    if not right.name.endswith("_right"):
+        raise ValueError(f"marker map {right.name!r} is not a right-leg map (*_right): both legs need a right and a left map")
+    return session_to_bilateral(session, right, load_marker_mapping(right.name[: -len("_right")] + "_left"), **options)
+
+
+def import_c3d_bilateral(path: str | Path, markers=None, **options) -> BilateralRecording:
+    """Contract v2 recording from a C3D file with one plate per foot (see :func:`bilateral_from_session`)."""
+    from hop_impedance.importers.c3d_import import c3d_session
+
+    return bilateral_from_session(c3d_session(path), markers, **options)
+
+
+def import_opensim_bilateral(trc_path: str | Path, mot_path: str | Path, markers=None, **options) -> BilateralRecording:
+    """Contract v2 recording from an OpenSim TRC + GRF MOT pair with one plate per foot (see :func:`bilateral_from_session`)."""
     from hop_impedance.importers.opensim_import import opensim_session
 
-    session = opensim_session(trc_path, mot_path)
-    return session_to_bilateral(session, load_marker_mapping(right), load_marker_mapping(left), **options)
+    return bilateral_from_session(opensim_session(trc_path, mot_path), markers, **options)

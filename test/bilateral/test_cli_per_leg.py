@@ -53,3 +53,20 @@ def test_per_leg_on_a_v1_file_is_a_one_line_error(tmp_path):
     assert run.returncode != 0
     assert "Traceback" not in run.stderr and "per-leg analysis needs contract v2" in run.stderr
     assert len(run.stderr.strip().splitlines()) == 1
+
+
+def test_import_both_legs_then_analyze_per_leg(tmp_path):
+    """hop-impedance import --both-legs writes contract v2; its per-plate topics read back equal to the library's."""
+    from hop_impedance.bilateral import load_bilateral
+
+    out = tmp_path / "dj.mcap"
+    run = subprocess.run([sys.executable, "-m", "hop_impedance.cli", "import", "--trc", str(TRC), "--mot", str(MOT),
+                          "--mass-kg", "60", "--both-legs", "--out", str(out)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert "ground_force_2 -> left foot" in run.stdout
+    back, lib = load_bilateral(out), import_opensim_bilateral(TRC, MOT, mass_kg=60.0)
+    assert back.is_bilateral
+    np.testing.assert_allclose(back.plates["left"].force_n, lib.plates["left"].force_n, atol=1e-9)
+    bad = subprocess.run([sys.executable, "-m", "hop_impedance.cli", "import", "--mot", str(MOT), "--mass-kg", "60",
+                          "--both-legs", "--out", str(tmp_path / "x.mcap")], capture_output=True, text=True, timeout=120)
+    assert bad.returncode != 0 and "Traceback" not in bad.stderr and "--both-legs needs markers" in bad.stderr
