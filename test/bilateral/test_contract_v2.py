@@ -87,3 +87,17 @@ def test_v1_file_reads_as_lumped_only(bilateral, tmp_path):
     assert not back.is_bilateral and back.plates == {} and back.left_markers is None
     with pytest.raises(ValueError, match="no /force_plate/left/wrench data"):
         back.leg("left")
+
+
+def test_per_plate_stamps_that_differ_from_the_summed_plate_are_refused(bilateral, tmp_path):
+    """A v2 file whose left-plate topic lost samples: the reader names the topic instead of misaligning the legs."""
+    from dataclasses import replace
+
+    from hop_impedance.recording import ForcePlateSeries
+
+    left = bilateral.plates["left"]
+    short = ForcePlateSeries(left.stamp_ns[:-5], left.force_n[:-5], left.torque_nm[:-5])
+    path = tmp_path / "lost.mcap"
+    save_bilateral(path, replace(bilateral, plates={**bilateral.plates, "left": short}))
+    with pytest.raises(ValueError, match="/force_plate/left/wrench stamps differ from /force_plate/wrench"):
+        load_bilateral(path)
