@@ -21,7 +21,12 @@ Runs the node graph in one process (EventsExecutor) on a bundled recording:
    with flow control (rate 0) nothing is lost by construction, its speed-up is printed too;
 3. fixed rates 5x, 10x, 20x with one process per node (``--processes``, both cores).
 
-Usage: .venv/bin/python bench/bench_pipeline.py [REC.mcap] [--latency-only]
+``--live-vs-offline N`` instead runs N end-to-end runs as ``test/ros/test_pipeline.py`` does
+(``--processes``, rate 0, the estimator given the structure ``analyze`` chose) and prints, per run,
+the largest relative difference |live - offline| / |offline| of any coefficient per joint: the same
+figures in every run show that the live result does not depend on message timing.
+
+Usage: .venv/bin/python bench/bench_pipeline.py [REC.mcap] [--latency-only | --live-vs-offline N]
 """
 
 import os
@@ -160,8 +165,43 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> str:
             f"load average {load:.1f} on {os.cpu_count()} cores")
 
 
+def live_vs_offline(rec: str, runs: int) -> None:
+    """Largest relative coefficient difference live vs ``analyze`` per joint, per run (module docstring)."""
+    import json
+    import subprocess
+
+    from hop_impedance.biomech.joint_angles import JOINT_NAMES
+    from hop_impedance.nodes.common import stamp_ns
+
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, "-m", "hop_impedance.cli", "analyze", rec, "--json", f"{tmp}/a.json"],
+                       check=True, capture_output=True)
+        offline = json.loads(open(f"{tmp}/a.json").read())
+    given = {f"model_terms_{j}": offline["model_structure"][j]["terms"] for j in JOINT_NAMES}
+    complete = [s for s in offline["stances"] if s["complete"]]
+    for k in range(runs):
+        report, _, _ = run(rec, rate=0.0, processes=True, overrides={"impedance_estimator": given})
+        profiles = {(stamp_ns(p.touchdown_stamp), p.joint): p for p in report.profiles}
+        live = sorted(report.summaries, key=lambda s: stamp_ns(s.touchdown_stamp))
+        worst = dict.fromkeys(JOINT_NAMES, 0.0)
+        for s_live, s_off in zip(live, complete):
+            for j in JOINT_NAMES:
+                fit = s_off["joints"][j]["fit"]
+                off = np.array([fit["coefficients"][t] for t in fit["terms"]])
+                diff = np.abs(np.array(profiles[(stamp_ns(s_live.touchdown_stamp), j)].coefficients) - off) / np.abs(off)
+                worst[j] = max(worst[j], float(diff.max()))
+        print(f"run {k + 1}: {len(live)} stances; max |live - offline| / |offline|: "
+              + ", ".join(f"{j} {100 * v:.4f} %" for j, v in worst.items())
+              + f"; load average {os.getloadavg()[0]:.1f}", flush=True)
+
+
 def main() -> None:
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    if "--live-vs-offline" in sys.argv:
+        runs = int(sys.argv[sys.argv.index("--live-vs-offline") + 1])
+        args = [a for a in args if a != str(runs)]
+        live_vs_offline(args[0] if args else "recordings/sim_2p20hz_hard.mcap", runs)
+        return
     rec = args[0] if args else "recordings/sim_2p20hz_hard.mcap"
     events = offline_events(rec)
     for name, kw in (("one process, batch", {}), ("one process, low-latency", {"low_latency": True}),

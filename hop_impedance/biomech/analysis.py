@@ -48,7 +48,9 @@ from hop_impedance.biomech.stance_metrics import (
     leg_stiffness,
     overall_joint_stiffness,
 )
-from hop_impedance.recording import FORCE_TOPIC, GRAVITY_M_S2, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, Recording, Subject
+from hop_impedance.recording import (
+    FORCE_TOPIC, GRAVITY_M_S2, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, MarkerSeries, Recording, Subject,
+)
 
 
 @dataclass(frozen=True)
@@ -71,6 +73,11 @@ class AnalysisOptions:
         Use this model instead of scaling one from the markers.
     overrides : dict or None
         Per-segment overrides applied to the scaled model.
+    calibration_s : float or None
+        The body model is scaled from the complete marker frames stamped
+        within this many seconds of the first complete frame
+        (:func:`calibration_markers`, the rule the live ``inverse_dynamics``
+        uses, so live and offline share one model); None = every frame.
     """
 
     marker_cutoff_hz: float = DEFAULT_CUTOFF_HZ
@@ -81,6 +88,7 @@ class AnalysisOptions:
     pad_s: float = 0.3
     body_model: BodyModel | None = None
     overrides: dict | None = None
+    calibration_s: float | None = 1.0
 
 
 @dataclass
@@ -350,10 +358,34 @@ def analyze_recording(rec: Recording, options: AnalysisOptions | None = None) ->
     stances = detector.stances
     model = options.body_model
     if model is None and data.markers_xz is not None:
-        model = body_model_from_markers(rec.subject, rec.markers, options.overrides)
+        model = body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s), options.overrides)
     results = analyze_span(data, stances, list(range(len(stances))), model, rec.subject.body_mass_kg, options)
     _reject_holes(results, data, options)
     return RecordingAnalysis(rec.subject, model, rec.start_ns, recording_info(rec), results, list(rec.warnings) + detector.warnings, options)
+
+
+def calibration_markers(markers: MarkerSeries, calibration_s: float | None) -> MarkerSeries:
+    """The marker frames the body model is scaled from: one rule for ``analyze`` and the live node.
+
+    The complete frames (every contract marker visible) whose stamp lies
+    within ``calibration_s`` of the first complete frame's stamp (integer
+    nanoseconds, bounds included). The rule depends on stamps only, so the
+    live ``inverse_dynamics``, which waits for the first frame stamped
+    beyond the window and then calls this on what it holds, gets the same
+    frames whatever the message batching (it used to take every frame that
+    had arrived when it started: 115 frames in one run, 140 in another, and
+    a hip k1 0.45 % away from offline). ``calibration_s`` None: every
+    complete frame. No complete frame: the series unchanged (the model
+    scaling then names what is missing).
+    """
+    complete = np.all(np.isfinite(sagittal_markers(markers)), axis=(1, 2))
+    if not complete.any():
+        return markers
+    keep = complete
+    if calibration_s is not None:
+        first = int(markers.stamp_ns[complete][0])
+        keep = complete & (markers.stamp_ns >= first) & (markers.stamp_ns - first <= round(calibration_s * 1e9))
+    return MarkerSeries(markers.stamp_ns[keep], markers.names, markers.positions_m[keep])
 
 
 def _reject_holes(results: list[StanceResult], data: SpanData, options: AnalysisOptions) -> None:

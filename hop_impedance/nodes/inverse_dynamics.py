@@ -3,9 +3,11 @@
 Thin adapter around :class:`hop_impedance.biomech.stages.StanceAnalysisStage`:
 
 - ``/subject`` (transient-local) gives mass, height; the body model is scaled
-  from the first ``calibration_s`` of marker frames in which all markers are
-  visible (the offline analysis uses the whole recording; the two models
-  differ by ~1e-4 in segment lengths on the bundled recordings).
+  from the complete marker frames stamped within ``calibration_s`` of the
+  first one (:func:`hop_impedance.biomech.analysis.calibration_markers`, the
+  rule ``analyze`` uses too): the node waits for the first marker frame
+  stamped beyond that window, so the model does not depend on how the
+  messages were batched, and equals the offline one.
 - Force (1 kHz) and markers (100 Hz) arrive at different rates, with jitter,
   loss and possibly out of order. Each stream goes through a reorder buffer
   (``reorder_window_s`` of stamp time); the stage itself waits until both
@@ -44,7 +46,7 @@ from geometry_msgs.msg import WrenchStamped
 from rclpy.node import Node
 from std_msgs.msg import Header
 
-from hop_impedance.biomech.analysis import AnalysisOptions, StanceResult
+from hop_impedance.biomech.analysis import AnalysisOptions, StanceResult, calibration_markers
 from hop_impedance.biomech.kinematics import body_model_from_markers
 from hop_impedance.biomech.stages import StanceAnalysisStage
 from hop_impedance.nodes.common import (
@@ -63,23 +65,25 @@ class InverseDynamicsNode(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("inverse_dynamics", **kwargs)
         reliable, reorder_s, period, diag = declare_stream_parameters(self, "the stage")
-        self.calibration_s = declare(self, "calibration_s", 1.0, "scale the body model from the first this many seconds of complete marker frames")
         self.publish_frames = declare(self, "publish_frames", True, "publish per-frame JointKinetics of each analysed stance")
         self.sex = declare(self, "sex", "female", "de Leva table: female or male (not in SubjectInfo)")
         low_latency = declare(self, "low_latency", False, "analyse at take-off + post_pad_s instead of at the next touchdown")
         post_pad = declare(self, "post_pad_s", 0.05, "low-latency mode: data used after take-off (s)")
         defaults = AnalysisOptions()
+        self.calibration_s = declare(self, "calibration_s", defaults.calibration_s,
+                                     "scale the body model from the complete marker frames within this many seconds of the first")
         cutoff = declare(self, "cutoff_hz", defaults.marker_cutoff_hz, "low-pass cut-off of markers and forces (Hz)")
         max_gap = declare(self, "max_gap_s", defaults.max_gap_s, "longest marker gap filled by interpolation (s)")
         # the stance detector's parameters and defaults, so both nodes find the same stances (one detector)
         self.options = AnalysisOptions(marker_cutoff_hz=cutoff, force_cutoff_hz=cutoff, max_gap_s=max_gap,
-                                       detector=declare_detector_options(self))
+                                       detector=declare_detector_options(self), calibration_s=self.calibration_s)
         self.guard = InputGuard(self, cutoff)  # the input checks analyze runs (hop_impedance.input_checks)
         self.post_pad_s = post_pad if low_latency else None
         self.subject: Subject | None = None
         self.stage: StanceAnalysisStage | None = None
         self.t0_ns: int | None = None
-        self.calib: list[tuple[int, np.ndarray]] = []
+        self.calib: list[tuple[int, np.ndarray]] = []  # complete marker frames (stamp ns, xz) until the model is scaled
+        self.newest_marker_ns: int | None = None  # newest released marker stamp (the stream is stamp-sorted)
         self.force_buf = ReorderBuffer(int(reorder_s * 1e9))
         self.marker_buf = ReorderBuffer(int(reorder_s * 1e9))
         self.pending_force: list[tuple[int, object]] = []  # released, waiting for the body model
@@ -192,6 +196,8 @@ class InverseDynamicsNode(Node):
             self.pending_force += forces
             self.pending_markers += markers
             self.calib += [m for m in markers if np.all(np.isfinite(m[1]))]
+            if markers:
+                self.newest_marker_ns = int(markers[-1][0])
             self._start_stage()
             if self.stage is None:
                 self._bound_pending()
@@ -216,7 +222,12 @@ class InverseDynamicsNode(Node):
             self.diagnostics.sample_ns = int(forces[-1][0])
 
     def _start_stage(self, force_model: bool = False) -> None:
-        """Scale the body model once the subject and ``calibration_s`` of marker frames are in."""
+        """Scale the body model once the subject is known and a marker frame stamped beyond the calibration window is in.
+
+        The released marker stream is stamp-sorted (reorder buffer; later
+        frames are dropped as too late), so no frame of the window can come
+        after that one: the frames used are fixed by their stamps alone.
+        """
         if self.guard.failure is not None or self._force_only(force_model):
             # failed input check, or no markers at all: no model; every stance still gets a row with its reason
             mass = self.subject.body_mass_kg if self.subject is not None else math.nan
@@ -224,15 +235,18 @@ class InverseDynamicsNode(Node):
             return
         if self.subject is None or not self.calib:
             return
-        span_s = (self.calib[-1][0] - self.calib[0][0]) * 1e-9
-        if span_s < self.calibration_s and not force_model:
+        window_ns = round(self.calibration_s * 1e9)
+        if self.newest_marker_ns - self.calib[0][0] <= window_ns and not force_model:
             return
         stamps = np.array([c[0] for c in self.calib], np.int64)
         xz = np.stack([c[1] for c in self.calib])
         positions = np.zeros(xz.shape[:2] + (3,))
         positions[:, :, 0], positions[:, :, 2] = xz[:, :, 0], xz[:, :, 1]
+        frames = calibration_markers(MarkerSeries(stamps, MARKER_NAMES, positions), self.calibration_s)
+        stamps = frames.stamp_ns
+        span_s = (stamps[-1] - stamps[0]) * 1e-9
         try:
-            model = body_model_from_markers(self.subject, MarkerSeries(stamps, MARKER_NAMES, positions))
+            model = body_model_from_markers(self.subject, frames)
         except ValueError as exc:
             self.get_logger().error(f"body model: {exc}")
             return
