@@ -20,6 +20,17 @@ and publishes, per stance:
   from the parameters ``min_r_squared``, ``k0_factor``, ``k1_factor``,
   ``damping_tolerance``). See docs/pipeline.md, "The controller's contract".
 
+  Issue 21: the feed also carries ``side`` (parameter; ``lumped`` today),
+  the ``subject_id`` of ``/subject``, the stance's touchdown / take-off
+  stamps, each coefficient's standard error, and the pooled estimate over the
+  last ``pool_stances`` valid stances (:mod:`hop_impedance.impedance.pooling`).
+  The feed invalidates itself, by publishing ``valid = false`` with
+  ``invalid_reason``: when a valid value is older than ``max_age_s`` (wall
+  clock since its take-off reached ``inverse_dynamics``; checked every
+  ``max_age_s / 10``), and when ``/subject`` changes (values set to NaN, pool
+  emptied; a stance that touched down before the new ``/subject``'s stamp, or
+  was analysed for another body mass than ``/subject``'s, is not valid).
+
 A stance rejected by an input check turns this node's ``/diagnostics`` to
 ERROR with the rule's reason.
 
@@ -49,6 +60,7 @@ from rclpy.node import Node
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.biomech.stages import equivalent_linear_impedance
 from hop_impedance.impedance.plausibility import PlausibilityBounds, controller_damping, controller_rejection
+from hop_impedance.impedance.pooling import StancePool
 from hop_impedance.input_checks import INPUT_CHECK_PREFIX
 from hop_impedance.impedance.recording_fits import SEED_TERMS, StructureSelector, default_fit_options
 from hop_impedance.impedance.stance_fit import JointImpedanceFit
@@ -58,8 +70,13 @@ from hop_impedance.nodes.common import (
 )
 from hop_impedance.nodes.inverse_dynamics import stance_from_message
 from hop_impedance.nodes.qos import STANCE_HISTORY, history_qos, latched_qos, result_qos
-from hop_impedance.recording import GRAVITY_M_S2
-from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, StanceSummary
+from hop_impedance.recording import GRAVITY_M_S2, SUBJECT_TOPIC
+from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, StanceSummary, SubjectInfo
+
+#: Default stated maximum age of a valid controller value (s); reasoning in docs/pipeline.md ("How old").
+MAX_AGE_S = 2.0
+#: Stances a controller value may have been analysed for another mass than /subject's: relative tolerance.
+MASS_TOLERANCE = 0.005
 
 
 class ImpedanceEstimatorNode(Node):
@@ -95,13 +112,25 @@ class ImpedanceEstimatorNode(Node):
         self.stances_in = 0
         self.accepted = np.zeros(3, int)
         self.rejected = np.zeros(3, int)
-        self.feed = _empty_feed()
+        side = declare(self, "side", "lumped", "controller feed: which leg the values are for (lumped, left, right)")
+        if side not in ("lumped", "left", "right"):
+            raise ValueError(f"parameter side must be lumped, left or right, got {side!r}")
+        self.max_age_s = float(declare(self, "max_age_s", MAX_AGE_S, "controller feed: a valid value older than this (s, "
+                                       "since its take-off reached inverse_dynamics) is republished invalid"))
+        pool_n = declare(self, "pool_stances", 10, "controller feed: pool each coefficient over the last N valid stances")
+        self.pools = {name: StancePool(pool_n) for name in JOINT_NAMES}
+        self.valid_since_ns = [0, 0, 0]  # wall clock (ns) at which each valid value's take-off reached the pipeline
+        self.subject_key: tuple | None = None
+        self.subject_since_ns = 0  # touchdowns before this stamp belong to the previous subject
+        self.feed = _empty_feed(side, self.max_age_s, pool_n)
         self.pub_profile = self.create_publisher(ImpedanceProfile, PROFILE_TOPIC, result_qos())
         self.pub_summary = self.create_publisher(StanceSummary, SUMMARY_TOPIC, result_qos())
         self.pub_feed = self.create_publisher(ControllerImpedance, CONTROLLER_TOPIC, latched_qos())
         self.pub_feed.publish(self.feed)  # nothing valid until a stance passed every check
         # transient-local: started mid-session, the recent stances arrive at once (de-duplicated by touchdown stamp)
         self.create_subscription(StanceKinetics, STANCE_KINETICS_TOPIC, self._on_stance, history_qos())
+        self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
+        self.create_timer(self.max_age_s / 10.0, self._expire)
         self.seen_touchdowns: collections.deque = collections.deque(maxlen=4 * STANCE_HISTORY)
         self.diagnostics = Diagnostics(self, diag, self._diag_values, self._diag_level)
 
@@ -129,7 +158,14 @@ class ImpedanceEstimatorNode(Node):
             else:
                 self.rejected[j] += 1
         self.pub_summary.publish(summary_message(msg, fits))
-        reasons = update_feed(self.feed, msg, stance, fits, self.bounds)
+        before = (f"stance touched down before /subject changed to {self.feed.subject_id!r}"
+                  if touchdown_ns < self.subject_since_ns else None)
+        subject_mass = self.subject_key[1] if self.subject_key is not None else None
+        reasons = update_feed(self.feed, msg, stance, fits, self.bounds, self.pools, before, subject_mass)
+        for j, name in enumerate(JOINT_NAMES):
+            if reasons[name] is None:
+                self.valid_since_ns[j] = msg.takeoff_received_ns or time.time_ns()
+        self._expire(publish=False)  # a stance that arrives already too old is not valid
         self.pub_feed.publish(self.feed)
         for j, name in enumerate(JOINT_NAMES):
             self.valid[j] += reasons[name] is None
@@ -138,6 +174,40 @@ class ImpedanceEstimatorNode(Node):
         if msg.rejection_reason.startswith(INPUT_CHECK_PREFIX):
             self.input_failure = msg.rejection_reason
         self.diagnostics.sample_ns = stamp_ns(msg.header.stamp)
+
+    def _on_subject(self, msg: SubjectInfo) -> None:
+        """A new subject: everything latched from the previous one is invalid (published), the pool emptied."""
+        key = (msg.subject_id, float(msg.body_mass), float(msg.body_height))
+        if key == self.subject_key:
+            return  # the same /subject again (a looped replay, a late transient-local copy)
+        changed = self.subject_key is not None or any(self.feed.valid)
+        old = self.feed.subject_id
+        self.subject_key = key
+        self.feed.subject_id = msg.subject_id
+        if not changed:
+            return
+        self.subject_since_ns = stamp_ns(msg.header.stamp)
+        for pool in self.pools.values():
+            pool.clear()
+        reason = f"subject changed from {old!r} to {msg.subject_id!r}"
+        reset_feed(self.feed, reason)
+        self.last_invalid = reason
+        self.pub_feed.publish(self.feed)
+
+    def _expire(self, publish: bool = True) -> None:
+        """Mark valid values older than ``max_age_s`` invalid; publish if any changed (``publish``)."""
+        now = time.time_ns()
+        valid, reasons = list(self.feed.valid), list(self.feed.invalid_reason)
+        for j, name in enumerate(JOINT_NAMES):
+            age_s = (now - self.valid_since_ns[j]) * 1e-9
+            if valid[j] and age_s > self.max_age_s:
+                valid[j] = False
+                reasons[j] = f"older than max_age_s {self.max_age_s:g} s (take-off {age_s:.2f} s ago)"
+                self.last_invalid = f"stance {self.feed.stance_index} {name}: {reasons[j]}"
+        if valid != list(self.feed.valid):
+            self.feed.valid, self.feed.invalid_reason = valid, reasons
+            if publish:
+                self.pub_feed.publish(self.feed)
 
     def _diag_values(self) -> dict:
         out = {"stances_received": self.stances_in,
@@ -229,17 +299,34 @@ def summary_message(stance: StanceKinetics, fits: dict[str, JointImpedanceFit]) 
     return msg
 
 
-def _empty_feed() -> ControllerImpedance:
-    msg = ControllerImpedance()
-    for name in ("k0_nm_per_rad", "k1_nm_per_rad2", "b0_nms_per_rad", "rho0_rad", "omega0_rad_s", "tau0_nm",
-                 "stiffness_eq_nm_per_rad", "damping_eq_nms_per_rad", "equilibrium_angle_rad"):
-        setattr(msg, name, [math.nan] * 3)
-    msg.valid = [False] * 3
+#: Per-joint value fields of ControllerImpedance (NaN until a valid stance; kept while invalid).
+VALUE_FIELDS = ("k0_nm_per_rad", "k1_nm_per_rad2", "b0_nms_per_rad", "rho0_rad", "omega0_rad_s", "tau0_nm",
+                "stiffness_eq_nm_per_rad", "damping_eq_nms_per_rad", "equilibrium_angle_rad",
+                "k0_std_error", "k1_std_error", "b0_std_error")
+#: Pooled fields: message field -> (coefficient, value or standard error).
+POOLED_FIELDS = {"pooled_k0_nm_per_rad": ("k0", "value"), "pooled_k0_std_error": ("k0", "std_error"),
+                 "pooled_k1_nm_per_rad2": ("k1", "value"), "pooled_k1_std_error": ("k1", "std_error"),
+                 "pooled_b0_nms_per_rad": ("b0", "value"), "pooled_b0_std_error": ("b0", "std_error")}
+
+
+def _empty_feed(side: str = "lumped", max_age_s: float = MAX_AGE_S, pool_size: int = 0) -> ControllerImpedance:
+    msg = ControllerImpedance(side=side, max_age_s=float(max_age_s), pool_size=int(pool_size))
+    reset_feed(msg, "no valid stance yet")
     return msg
 
 
+def reset_feed(feed: ControllerImpedance, reason: str) -> None:
+    """Every joint invalid with ``reason``, every value and pooled value NaN, pooled counts 0."""
+    for name in (*VALUE_FIELDS, *POOLED_FIELDS):
+        setattr(feed, name, [math.nan] * 3)
+    feed.pooled_n_stances = [0] * 3
+    feed.valid = [False] * 3
+    feed.invalid_reason = [reason] * 3
+
+
 def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result, fits: dict[str, JointImpedanceFit],
-                bounds: PlausibilityBounds | None = None) -> dict[str, str | None]:
+                bounds: PlausibilityBounds | None = None, pools: dict[str, StancePool] | None = None,
+                reason: str | None = None, subject_mass_kg: float | None = None) -> dict[str, str | None]:
     """Update the controller feed with this stance; returns why each joint is not valid (None = valid).
 
     A joint is valid when the stance has no rejection reason (input checks, loss,
@@ -253,19 +340,29 @@ def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result
     (never negative). Invalid joints keep their previous values and get
     ``valid = false``. Body mass (for the Table 2 scaling) is the one
     inverse_dynamics used: ``peak_grf_n / (peak_grf_bw g)``.
+
+    Issue 21: ``reason`` (if given) makes every joint invalid like a stance
+    rejection; with ``subject_mass_kg`` (``/subject``'s), a stance analysed for
+    a body mass more than 0.5 % away is not valid (analysed for another
+    subject). Valid joints' fits enter ``pools`` (one
+    :class:`~hop_impedance.impedance.pooling.StancePool` per joint) and the
+    pooled k0, k1, b0 with their standard errors are published; each
+    coefficient's own standard error comes from the fit (NaN for a term held
+    at a bound or not fitted).
     """
     feed.header = stance.header
     feed.stance_index = stance.stance_index
-    arrays = {n: list(getattr(feed, n)) for n in (
-        "k0_nm_per_rad", "k1_nm_per_rad2", "b0_nms_per_rad", "rho0_rad", "omega0_rad_s", "tau0_nm",
-        "stiffness_eq_nm_per_rad", "damping_eq_nms_per_rad", "equilibrium_angle_rad")}
+    feed.touchdown_stamp, feed.takeoff_stamp = stance.touchdown_stamp, stance.takeoff_stamp
+    arrays = {n: list(getattr(feed, n)) for n in VALUE_FIELDS}
     valid = list(feed.valid)
+    invalid = list(feed.invalid_reason)
+    stance_reason = stance.rejection_reason or reason
     reasons: dict[str, str | None] = {}
     mass = stance.peak_grf_n / (stance.peak_grf_bw * GRAVITY_M_S2) if stance.peak_grf_bw > 0 else math.nan
     hop_f = stance.hop_frequency_hz if math.isfinite(stance.hop_frequency_hz) else None
     for j, name in enumerate(JOINT_NAMES):
         fit = fits[name]
-        reason = stance.rejection_reason or None
+        reason = stance_reason or None
         values = None
         if reason is None and stance_result.joints is not None:
             data = stance_result.joints.joint(name)
@@ -274,17 +371,30 @@ def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result
             values = {"k0_nm_per_rad": _c(fit, "k0"), "k1_nm_per_rad2": _c(fit, "k1"), "b0_nms_per_rad": _c(fit, "b0"),
                       "rho0_rad": float(fit.rho0), "omega0_rad_s": float(fit.omega0), "tau0_nm": _c(fit, "m0"),
                       "stiffness_eq_nm_per_rad": k_eq, "damping_eq_nms_per_rad": controller_damping(b_eq),
-                      "equilibrium_angle_rad": theta_eq}
+                      "equilibrium_angle_rad": theta_eq,
+                      **{f"{t}_std_error": _f(fit.std_errors.get(t)) for t in ("k0", "k1", "b0")}}
+            if reason is None and subject_mass_kg and not abs(mass - subject_mass_kg) <= MASS_TOLERANCE * subject_mass_kg:
+                reason = (f"stance analysed for body mass {mass:.1f} kg, /subject {feed.subject_id!r} "
+                          f"has {subject_mass_kg:.1f} kg")
         elif reason is None:
             reason = fit.rejection_reason or "no joint data"
         reasons[name] = reason
         valid[j] = reason is None
+        invalid[j] = reason or ""
         if reason is None:
             for key, v in values.items():
                 arrays[key][j] = v
+            if pools is not None:
+                pools[name].add(fit)
     for key, v in arrays.items():
         setattr(feed, key, v)
+    if pools is not None:
+        estimates = {name: {t: pools[name].estimate(t) for t in ("k0", "k1", "b0")} for name in JOINT_NAMES}
+        for field, (term, attr) in POOLED_FIELDS.items():
+            setattr(feed, field, [float(getattr(estimates[n][term], attr)) for n in JOINT_NAMES])
+        feed.pooled_n_stances = [len(pools[n]) for n in JOINT_NAMES]
     feed.valid = valid
+    feed.invalid_reason = invalid
     return reasons
 
 

@@ -1,0 +1,188 @@
+"""Issue 21, controller feed: who, which stance, how sure, how old; invalidation over real DDS.
+
+One process, one rclpy context, loopback DDS: the real ``impedance_estimator``
+node, and a test node that publishes ``/subject`` and ``/stance/kinetics``
+(the bundled recording's ten stances as analysed by ``analyze_recording``,
+turned into messages by inverse_dynamics' own ``stance_message``) and
+listens to ``/impedance/controller`` and ``/impedance/profile``. The fits,
+the standard errors and the plausibility rule are the node's own; nothing is
+mocked.
+
+Shown: the feed's pooled k0/k1/b0 and their standard errors equal a direct
+inverse-variance computation from the same stances' published fits
+(``ImpedanceProfile.coefficients`` / ``std_errors``); a valid value is
+republished invalid once older than ``max_age_s``, and a stance that arrives
+already older is not valid; a ``/subject`` change invalidates the latched
+values at once (NaN, pool emptied), and neither a stance that touched down
+before the new subject nor one analysed for another body mass becomes valid.
+"""
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+rclpy = pytest.importorskip("rclpy")
+
+from rclpy.parameter import Parameter  # noqa: E402
+
+from hop_impedance.biomech.analysis import analyze_recording  # noqa: E402
+from hop_impedance.biomech.joint_angles import JOINT_NAMES  # noqa: E402
+from hop_impedance.nodes.common import CONTROLLER_TOPIC, PROFILE_TOPIC, STANCE_KINETICS_TOPIC, set_stamp, stamp_ns  # noqa: E402
+from hop_impedance.nodes.inverse_dynamics import stance_message  # noqa: E402
+from hop_impedance.nodes.qos import history_qos, latched_qos, result_qos  # noqa: E402
+from hop_impedance.recording import SUBJECT_TOPIC  # noqa: E402
+from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, SubjectInfo  # noqa: E402
+from test.cli import bad_recordings as bad  # noqa: E402
+
+MAX_AGE_S = 1.0
+POOL = 4
+
+
+@pytest.fixture(scope="module")
+def stances():
+    rec = bad.bundled()
+    analysis = analyze_recording(rec)
+    msgs = [stance_message(s, analysis.start_ns) for s in analysis.stances if s.rejection_reason is None]
+    assert len(msgs) == 10
+    return rec.subject, msgs
+
+
+def _subject(subject_id: str, mass: float, height: float, stamp_ns_: int = 0) -> SubjectInfo:
+    msg = SubjectInfo(subject_id=subject_id, body_mass=mass, body_height=height)
+    set_stamp(msg.header.stamp, stamp_ns_)
+    return msg
+
+
+def _direct_pool(values: list[float], errors: list[float]) -> tuple[float, float]:
+    """Inverse-variance weighted mean and its standard error, written out (not the pooling module)."""
+    w = [1.0 / (e * e) for e in errors]
+    return sum(wi * v for wi, v in zip(w, values)) / sum(w), 1.0 / math.sqrt(sum(w))
+
+
+def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
+    from hop_impedance.nodes.impedance_estimator import ImpedanceEstimatorNode
+
+    subject, msgs = stances
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        estimator = ImpedanceEstimatorNode(context=context, parameter_overrides=[
+            Parameter("max_age_s", value=MAX_AGE_S), Parameter("pool_stances", value=POOL),
+            Parameter("diagnostics_period_s", value=0.0)])
+        tester = rclpy.create_node("controller_feed_tester", context=context)
+        feeds: list[tuple[float, ControllerImpedance]] = []
+        profiles: list[ImpedanceProfile] = []
+        tester.create_subscription(ControllerImpedance, CONTROLLER_TOPIC, lambda m: feeds.append((time.time_ns(), m)),
+                                   history_qos(200))
+        tester.create_subscription(ImpedanceProfile, PROFILE_TOPIC, profiles.append, result_qos(1000))
+        pub_stance = tester.create_publisher(StanceKinetics, STANCE_KINETICS_TOPIC, history_qos())
+        pub_subject = tester.create_publisher(SubjectInfo, SUBJECT_TOPIC, latched_qos())
+        executor = rclpy.executors.SingleThreadedExecutor(context=context)
+        executor.add_node(estimator)
+        executor.add_node(tester)
+
+        def spin_until(predicate, timeout_s=30.0):
+            deadline = time.monotonic() + timeout_s
+            while time.monotonic() < deadline and not predicate():
+                executor.spin_once(timeout_sec=0.02)
+            return predicate()
+
+        def send(msg: StanceKinetics, age_s: float = 0.0) -> ControllerImpedance:
+            """Publish a stance whose take-off reached the pipeline ``age_s`` ago; return its feed message."""
+            msg.takeoff_received_ns = time.time_ns() - int(age_s * 1e9)
+            n = len(feeds)
+            pub_stance.publish(msg)
+            assert spin_until(lambda: any(f.stance_index == msg.stance_index and stamp_ns(f.takeoff_stamp) ==
+                                          stamp_ns(msg.takeoff_stamp) for _, f in feeds[n:])), msg.stance_index
+            return next(f for _, f in feeds[n:] if f.stance_index == msg.stance_index)
+
+        assert spin_until(lambda: feeds)  # the start message: nothing valid
+        assert not any(feeds[-1][1].valid) and feeds[-1][1].invalid_reason[0] == "no valid stance yet"
+        pub_subject.publish(_subject(subject.subject_id, subject.body_mass_kg, subject.body_height_m))
+        assert spin_until(lambda: estimator.subject_key is not None)
+
+        # 1. six fresh stances: who, which stance, each SE, and the pooled estimate over the last POOL valid ones
+        sent = [send(m) for m in msgs[:6]]
+        assert spin_until(lambda: len(profiles) >= 18)
+        last = sent[-1]
+        assert last.side == "lumped" and last.subject_id == subject.subject_id and last.pool_size == POOL
+        assert last.max_age_s == MAX_AGE_S
+        assert stamp_ns(last.touchdown_stamp) == stamp_ns(msgs[5].touchdown_stamp)
+        assert stamp_ns(last.takeoff_stamp) == stamp_ns(msgs[5].takeoff_stamp) == stamp_ns(last.header.stamp)
+        fits = {(p.stance_index, p.joint): p for p in profiles}
+        checked = 0
+        for j, joint in enumerate(JOINT_NAMES):
+            valid_idx = [f.stance_index for f in sent if f.valid[j]][-POOL:]
+            assert len(valid_idx) >= 2, (joint, [f.invalid_reason[j] for f in sent])
+            assert last.pooled_n_stances[j] == len(valid_idx)
+            for term, value_field, se_field in (("k0", "pooled_k0_nm_per_rad", "pooled_k0_std_error"),
+                                                ("k1", "pooled_k1_nm_per_rad2", "pooled_k1_std_error"),
+                                                ("b0", "pooled_b0_nms_per_rad", "pooled_b0_std_error")):
+                pairs = []
+                for i in valid_idx:
+                    p = fits[(i, joint)]
+                    c, se = p.coefficients[p.terms.index(term)], p.std_errors[p.terms.index(term)]
+                    if math.isfinite(se) and se > 0:
+                        pairs.append((c, se))
+                if not pairs:
+                    assert math.isnan(getattr(last, value_field)[j])
+                    continue
+                value, se = _direct_pool([c for c, _ in pairs], [s for _, s in pairs])
+                assert getattr(last, value_field)[j] == pytest.approx(value, rel=1e-12)
+                assert getattr(last, se_field)[j] == pytest.approx(se, rel=1e-12)
+                assert se < min(s for _, s in pairs)  # pooling narrows the interval
+                checked += 1
+            if last.valid[j]:  # the latest stance's own SEs are its fit's
+                p = fits[(last.stance_index, joint)]
+                assert last.k0_std_error[j] == pytest.approx(p.std_errors[p.terms.index("k0")], rel=1e-12)
+                assert last.k0_nm_per_rad[j] == pytest.approx(p.coefficients[p.terms.index("k0")], rel=1e-12)
+        assert checked >= 6
+        print(f"pooled hip k0 {last.pooled_k0_nm_per_rad[2]:.1f} +- {last.pooled_k0_std_error[2]:.2f} N m/rad "
+              f"over {last.pooled_n_stances[2]} stances; latest stance {last.k0_nm_per_rad[2]:.1f} +- "
+              f"{last.k0_std_error[2]:.2f}")
+
+        # 2. too old: the latched valid value is republished invalid once older than max_age_s
+        assert any(last.valid)
+        t_valid = time.time_ns()
+        n = len(feeds)
+        assert spin_until(lambda: any(not any(f.valid) for _, f in feeds[n:]), 3 * MAX_AGE_S + 5)
+        t_expired, expired = next((t, f) for t, f in feeds[n:] if not any(f.valid))
+        assert all(r.startswith(f"older than max_age_s {MAX_AGE_S:g} s") for r, v in zip(expired.invalid_reason, last.valid) if v)
+        age_s = (t_expired - t_valid) * 1e-9
+        assert MAX_AGE_S * 0.9 < age_s < MAX_AGE_S + 2.0, age_s
+        print(f"expiry message {age_s:.2f} s after the stance (max_age_s {MAX_AGE_S})")
+        # ... and a stance that arrives already older than max_age_s is not valid either
+        stale = send(msgs[6], age_s=2 * MAX_AGE_S)
+        assert not any(stale.valid) and all(r.startswith("older than max_age_s") for r in stale.invalid_reason)
+
+        # 3. a new subject: the previous subject's latched values are invalid at once, NaN, pool emptied
+        fresh = send(msgs[7])
+        assert any(fresh.valid)
+        after_last_touchdown = stamp_ns(msgs[-1].takeoff_stamp) + 1
+        n = len(feeds)
+        pub_subject.publish(_subject("next", subject.body_mass_kg, subject.body_height_m, after_last_touchdown))
+        assert spin_until(lambda: len(feeds) > n)
+        changed = feeds[n][1]
+        assert changed.subject_id == "next" and not any(changed.valid)
+        assert changed.invalid_reason == [f"subject changed from {subject.subject_id!r} to 'next'"] * 3
+        assert all(math.isnan(v) for v in (*changed.k0_nm_per_rad, *changed.pooled_k0_nm_per_rad))
+        assert list(changed.pooled_n_stances) == [0, 0, 0]
+        # a stance that touched down before the new /subject belongs to the previous subject
+        before = send(msgs[8])
+        assert not any(before.valid) and list(before.pooled_n_stances) == [0, 0, 0]
+        assert before.invalid_reason == ["stance touched down before /subject changed to 'next'"] * 3
+        # a subject of another mass: a stance analysed for the old mass is not valid
+        pub_subject.publish(_subject("heavier", subject.body_mass_kg + 10.0, subject.body_height_m))
+        assert spin_until(lambda: feeds[-1][1].subject_id == "heavier")
+        other = send(msgs[9])
+        assert not any(other.valid)
+        assert all(r.startswith("stance analysed for body mass 54.8 kg, /subject 'heavier' has 64.8 kg")
+                   for r in other.invalid_reason)
+        # the fits themselves were accepted: the feed, not the fit, refused them
+        assert all(p.accepted for p in profiles if p.stance_index in (6, 8, 9))
+        # nothing published after the first change carried a valid value of the first subject
+        assert not any(any(f.valid) for _, f in feeds[n:])
+    finally:
+        rclpy.shutdown(context=context)
