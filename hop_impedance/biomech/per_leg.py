@@ -28,7 +28,7 @@ from dataclasses import replace
 import numpy as np
 
 from hop_impedance.bilateral import SIDES, BilateralRecording
-from hop_impedance.biomech.analysis import AnalysisOptions, RecordingAnalysis, analyze_recording
+from hop_impedance.biomech.analysis import AnalysisOptions, RecordingAnalysis, analyze_recording, calibration_markers
 from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.biomech.kinematics import body_model_from_markers
 
@@ -52,8 +52,10 @@ def analyze_leg(bilateral: BilateralRecording, side: str, options: AnalysisOptio
     """Stances and per-stance inverse dynamics of one leg (see the module docstring).
 
     ``options.body_model``, when given, is taken as that leg's model as is;
-    otherwise the lumped de Leva model is scaled from that leg's markers
-    (``options.overrides`` applied) and halved by :func:`leg_model`.
+    otherwise the lumped de Leva model is scaled from that leg's markers by
+    the lumped analysis' rule (the calibration frames of
+    :func:`~hop_impedance.biomech.analysis.calibration_markers`,
+    ``options.overrides`` applied) and halved by :func:`leg_model`.
     """
     options = options or AnalysisOptions()
     rec = bilateral.leg(side)
@@ -61,7 +63,8 @@ def analyze_leg(bilateral: BilateralRecording, side: str, options: AnalysisOptio
         raise ValueError(f"{rec.source or 'recording'}: no /subject message; give the subject's mass and height")
     model = options.body_model
     if model is None and rec.markers is not None:
-        model = leg_model(body_model_from_markers(rec.subject, rec.markers, options.overrides))
+        # the lumped analysis' scaling rule (same calibration frames), then halved
+        model = leg_model(body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s), options.overrides))
     analysis = analyze_recording(rec, replace(options, body_model=model))
     for stance in analysis.stances:
         stance.hip_residual_rms_nm = float("nan")  # the HAT is not part of one leg: no top-down check

@@ -62,9 +62,7 @@ def test_left_plus_right_equals_lumped_when_the_legs_move_alike(bilateral):
     """The lumped model is two identical legs on one plate. Given both legs the same (right) markers,
     left + right must equal the lumped analysis wherever both feet are down: Newton-Euler is linear in
     the segment masses and the ground wrench, and the per-leg masses and plates add up to the lumped ones.
-    Measured: 0.000 % of each joint's peak with both models scaled from all marker frames; 0.22 / 0.14 / 0.44 %
-    while the lumped analysis scales its model from the first second only (a pending change of analysis.py)
-    and the per-leg one from all frames; required 2 %."""
+    Measured: 0.000 % of each joint's peak (both models scaled from the same calibration frames); required 2 %."""
     same = replace(bilateral, left_markers=bilateral.recording.markers)
     rel, both_down = _sum_against_lumped(same, analyze_legs(same))
     print(f"left + right vs lumped, same markers: {np.round(100 * rel, 4)} % of peak over {both_down.sum()} samples")
@@ -74,7 +72,7 @@ def test_left_plus_right_equals_lumped_when_the_legs_move_alike(bilateral):
 def test_left_plus_right_with_each_legs_own_markers(bilateral):
     """With each leg's own markers the sum differs from the lumped analysis, which puts both feet at the right
     foot's place: in this contact the left ankle marker is 1.6-3.4 cm (median 2.9 cm) ahead of the right one,
-    so the lumped ankle moment carries the left foot's ~1000 N on the right ankle's lever (~30 N m). Measured: ankle 16.7 %, knee 6.6 %, hip 21.9 %
+    so the lumped ankle moment carries the left foot's ~1000 N on the right ankle's lever (~30 N m). Measured: ankle 16.8 %, knee 6.6 %, hip 21.9 %
     of the lumped peak. The per-leg figures are the physical ones; the 2 % agreement holds only when the legs
     move alike (test above)."""
     rel, _ = _sum_against_lumped(bilateral, analyze_legs(bilateral))

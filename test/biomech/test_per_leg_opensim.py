@@ -160,7 +160,7 @@ def _compare_with_opensim(bilateral, analysis, side, tmp_path) -> np.ndarray:
 
 @pytest.mark.parametrize("side", ["left", "right"])
 def test_leg_moments_agree_with_opensim_within_2_percent(legs, side, tmp_path):
-    """Measured: left 0.06 / 1.09 / 0.87 %, right 0.10 / 0.61 / 1.05 % (ankle / knee / hip) of peak."""
+    """Measured: left 0.06 / 1.09 / 0.87 %, right 0.09 / 0.61 / 1.05 % (ankle / knee / hip) of peak."""
     bilateral, analyses = legs
     analysis = analyses[side]
     # per-leg body: half the lumped leg segments (de Leva one side: 1.29 % foot, 4.81 % shank, 14.78 % thigh of 60 kg)
