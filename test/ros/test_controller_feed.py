@@ -89,6 +89,14 @@ def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
                 executor.spin_once(timeout_sec=0.02)
             return predicate()
 
+        def late_controller() -> ControllerImpedance:
+            """What a controller that subscribes now (reliable, transient-local) receives first."""
+            got: list[ControllerImpedance] = []
+            sub = tester.create_subscription(ControllerImpedance, CONTROLLER_TOPIC, got.append, latched_qos())
+            assert spin_until(lambda: got, 10.0)
+            tester.destroy_subscription(sub)
+            return got[0]
+
         def send(msg: StanceKinetics, age_s: float = 0.0) -> ControllerImpedance:
             """Publish a stance whose take-off reached the pipeline ``age_s`` ago; return its feed message."""
             msg.takeoff_received_ns = time.time_ns() - int(age_s * 1e9)
@@ -153,6 +161,9 @@ def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
         age_s = (t_expired - t_valid) * 1e-9
         assert MAX_AGE_S * 0.9 < age_s < MAX_AGE_S + 2.0, age_s
         print(f"expiry message {age_s:.2f} s after the stance (max_age_s {MAX_AGE_S})")
+        # a controller that subscribes now gets the latched message: the invalid one
+        late = late_controller()
+        assert not any(late.valid) and late.stance_index == last.stance_index
         # ... and a stance that arrives already older than max_age_s is not valid either
         stale = send(msgs[6], age_s=2 * MAX_AGE_S)
         assert not any(stale.valid) and all(r.startswith("older than max_age_s") for r in stale.invalid_reason)
@@ -169,6 +180,8 @@ def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
         assert changed.invalid_reason == [f"subject changed from {subject.subject_id!r} to 'next'"] * 3
         assert all(math.isnan(v) for v in (*changed.k0_nm_per_rad, *changed.pooled_k0_nm_per_rad))
         assert list(changed.pooled_n_stances) == [0, 0, 0]
+        late = late_controller()
+        assert late.subject_id == "next" and not any(late.valid)
         # a stance that touched down before the new /subject belongs to the previous subject
         before = send(msgs[8])
         assert not any(before.valid) and list(before.pooled_n_stances) == [0, 0, 0]
