@@ -306,7 +306,8 @@ VALUE_FIELDS = ("k0_nm_per_rad", "k1_nm_per_rad2", "b0_nms_per_rad", "rho0_rad",
 #: Pooled fields: message field -> (coefficient, value or standard error).
 POOLED_FIELDS = {"pooled_k0_nm_per_rad": ("k0", "value"), "pooled_k0_std_error": ("k0", "std_error"),
                  "pooled_k1_nm_per_rad2": ("k1", "value"), "pooled_k1_std_error": ("k1", "std_error"),
-                 "pooled_b0_nms_per_rad": ("b0", "value"), "pooled_b0_std_error": ("b0", "std_error")}
+                 "pooled_b0_nms_per_rad": ("b0", "value"), "pooled_b0_std_error": ("b0", "std_error"),
+                 **{f"pooled_{t}_chi2_per_dof": (t, "chi2_per_dof") for t in ("k0", "k1", "b0")}}
 
 
 def _empty_feed(side: str = "lumped", max_age_s: float = MAX_AGE_S, pool_size: int = 0) -> ControllerImpedance:

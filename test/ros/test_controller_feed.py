@@ -55,10 +55,12 @@ def _subject(subject_id: str, mass: float, height: float, stamp_ns_: int = 0) ->
     return msg
 
 
-def _direct_pool(values: list[float], errors: list[float]) -> tuple[float, float]:
-    """Inverse-variance weighted mean and its standard error, written out (not the pooling module)."""
+def _direct_pool(values: list[float], errors: list[float]) -> tuple[float, float, float]:
+    """Inverse-variance weighted mean, its standard error and Cochran's Q / (n - 1), written out (not the pooling module)."""
     w = [1.0 / (e * e) for e in errors]
-    return sum(wi * v for wi, v in zip(w, values)) / sum(w), 1.0 / math.sqrt(sum(w))
+    mean = sum(wi * v for wi, v in zip(w, values)) / sum(w)
+    q = sum(wi * (v - mean) ** 2 for wi, v in zip(w, values))
+    return mean, 1.0 / math.sqrt(sum(w)), q / (len(w) - 1) if len(w) > 1 else math.nan
 
 
 def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
@@ -137,9 +139,11 @@ def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
                 if not pairs:
                     assert math.isnan(getattr(last, value_field)[j])
                     continue
-                value, se = _direct_pool([c for c, _ in pairs], [s for _, s in pairs])
+                value, se, chi2 = _direct_pool([c for c, _ in pairs], [s for _, s in pairs])
                 assert getattr(last, value_field)[j] == pytest.approx(value, rel=1e-12)
                 assert getattr(last, se_field)[j] == pytest.approx(se, rel=1e-12)
+                chi2_feed = getattr(last, f"pooled_{term}_chi2_per_dof")[j]
+                assert chi2_feed == pytest.approx(chi2, rel=1e-9) if len(pairs) > 1 else math.isnan(chi2_feed)
                 assert se < min(s for _, s in pairs)  # pooling narrows the interval
                 checked += 1
             if last.valid[j]:  # the latest stance's own SEs are its fit's
@@ -149,7 +153,7 @@ def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
         assert checked >= 6
         print(f"pooled hip k0 {last.pooled_k0_nm_per_rad[2]:.1f} +- {last.pooled_k0_std_error[2]:.2f} N m/rad "
               f"over {last.pooled_n_stances[2]} stances; latest stance {last.k0_nm_per_rad[2]:.1f} +- "
-              f"{last.k0_std_error[2]:.2f}")
+              f"{last.k0_std_error[2]:.2f}; chi2/dof k0 " + ", ".join(f"{x:.2f}" for x in last.pooled_k0_chi2_per_dof))
 
         # 2. too old: the latched valid value is republished invalid once older than max_age_s
         assert any(last.valid)
