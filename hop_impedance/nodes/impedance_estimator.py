@@ -116,7 +116,8 @@ class ImpedanceEstimatorNode(Node):
         if side not in ("lumped", "left", "right"):
             raise ValueError(f"parameter side must be lumped, left or right, got {side!r}")
         self.max_age_s = float(declare(self, "max_age_s", MAX_AGE_S, "controller feed: a valid value older than this (s, "
-                                       "since its take-off reached inverse_dynamics) is republished invalid"))
+                                       "since its take-off reached inverse_dynamics) is republished invalid; 0 = no age "
+                                       "rule (only for replays faster than real time, where wall-clock age means nothing)"))
         pool_n = declare(self, "pool_stances", 10, "controller feed: pool each coefficient over the last N valid stances")
         self.pools = {name: StancePool(pool_n) for name in JOINT_NAMES}
         self.valid_since_ns = [0, 0, 0]  # wall clock (ns) at which each valid value's take-off reached the pipeline
@@ -130,7 +131,8 @@ class ImpedanceEstimatorNode(Node):
         # transient-local: started mid-session, the recent stances arrive at once (de-duplicated by touchdown stamp)
         self.create_subscription(StanceKinetics, STANCE_KINETICS_TOPIC, self._on_stance, history_qos())
         self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
-        self.create_timer(self.max_age_s / 10.0, self._expire)
+        if self.max_age_s > 0:
+            self.create_timer(self.max_age_s / 10.0, self._expire)
         self.seen_touchdowns: collections.deque = collections.deque(maxlen=4 * STANCE_HISTORY)
         self.diagnostics = Diagnostics(self, diag, self._diag_values, self._diag_level)
 
@@ -196,6 +198,8 @@ class ImpedanceEstimatorNode(Node):
 
     def _expire(self, publish: bool = True) -> None:
         """Mark valid values older than ``max_age_s`` invalid; publish if any changed (``publish``)."""
+        if self.max_age_s <= 0:
+            return
         now = time.time_ns()
         valid, reasons = list(self.feed.valid), list(self.feed.invalid_reason)
         for j, name in enumerate(JOINT_NAMES):
