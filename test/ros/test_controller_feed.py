@@ -36,7 +36,7 @@ from hop_impedance.recording import SUBJECT_TOPIC  # noqa: E402
 from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, SubjectInfo  # noqa: E402
 from test.cli import bad_recordings as bad  # noqa: E402
 
-MAX_AGE_S = 1.0
+MAX_AGE_S = 1.5
 POOL = 4
 
 
