@@ -1,4 +1,4 @@
-"""No silent loss: at replay rates the pipeline cannot keep up with, every force sample that does not arrive
+"""No silent loss: with messages left out on the way (seeded, injected by the replay), every force sample that does not arrive
 is counted exactly once, every stance inverse_dynamics detects gets one result (profiles or a rejection
 naming the loss), and a stance that was never detected lies in a gap whose loss is reported.
 
@@ -37,15 +37,18 @@ def _true_stances():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("rate", [40.0, 500.0])
-def test_overload_every_loss_counted_once_and_every_stance_accounted_for(tmp_path, rate):
+@pytest.mark.parametrize(("drop_fraction", "seed"), [(0.02, 3), (0.1, 5)])
+def test_loss_every_loss_counted_once_and_every_stance_accounted_for(tmp_path, drop_fraction, seed):
+    """Seeded loss injected by the replay (``drop_fraction``), not CPU starvation: the same messages are
+    missing in every run, so the counting rules are checked without depending on the machine's load."""
     counts = {i.topic: i.count for i in summarize(REC)}
-    report = run_pipeline(PipelineConfig(REC, str(tmp_path), rate=rate, timeout_s=40))
+    overrides = {"replay": {"drop_fraction": drop_fraction, "drop_seed": seed}}
+    report = run_pipeline(PipelineConfig(REC, str(tmp_path), rate=0.0, timeout_s=60, overrides=overrides))
     assert report.finished
     diag = lambda key: int(report.diag(ID, key, "-1"))  # noqa: E731
     got = report.received(ID, "/force_plate/wrench")
     missing = counts["/force_plate/wrench"] - got
-    assert missing > 0, f"nothing lost at {rate}x: the test does not exercise overload"
+    assert missing > 0, f"nothing lost at drop fraction {drop_fraction}: the test does not exercise loss"
     # 1. losses at arrival = what did not arrive (first/last lost leave no gap)
     assert missing - 2 <= diag("force_lost") <= missing
     # 2. each gap counted once, before/in a stance or after the last one
