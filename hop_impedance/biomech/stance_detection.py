@@ -45,12 +45,19 @@ Rules (defaults in :class:`DetectorOptions`, the one place they are set)
   samples (no recursion), and a "failure" whose steady level is already
   within the take-off level of the baseline is none (a re-run would repeat
   itself).
-- **Message loss.** Samples missing for longer than ``steady_s`` inside a
-  stance restart the failure test's clock at the first sample after the gap:
-  a gap is not a long steady stance. The stance is bridged over the gap and
-  kept; the analysis rejects it for its lost samples
-  (:func:`hop_impedance.biomech.stages.missing_samples_reason`, "... (message
-  loss)"). A 1 s gap inside a stance used to recurse without end here.
+- **Message loss.** Samples missing inside a stance for longer than
+  ``min_flight_s`` could hide a whole flight (and the next touchdown), so
+  the stance is never bridged over such a gap: it ends at the last sample
+  before the gap, rejected as "incomplete: cut by message loss", and the
+  first sample after the gap starts afresh with the same baseline (in
+  flight, or in a stance that is cut at its start by the loss). Two stances
+  therefore never merge into one row, however much is lost (issue 14: at
+  50x replay two hops used to come out as one 1.31 s contact). Shorter
+  gaps cannot hide a flight; the stance is kept and the analysis rejects it
+  for its lost samples (:func:`hop_impedance.biomech.stages.missing_samples_reason`,
+  "... (message loss)"). Either way the failure test's clock restarts after
+  the gap, so a gap is never read as a long steady stance (a 1 s gap inside
+  a stance used to recurse without end here).
 - Event times are sub-sample: the linear interpolation of the instant at
   which Fz - baseline crosses ``event_level_n`` (default = the take-off
   level), the level at which "a person looking at the curve" sees the force
@@ -257,6 +264,11 @@ class _FlightStats:
 NOISE_MIN_SAMPLES = 30
 
 
+#: Stamps are integer ns turned into float s: a gap of exactly ``min_flight_s`` (no room for a flight with
+#: its edges) must not read as a longer one through round-off.
+_STAMP_TOLERANCE_S = 1e-6
+
+
 class StanceDetector:
     """Sample-by-sample stance state machine (see the module docstring).
 
@@ -295,6 +307,7 @@ class StanceDetector:
         self._prev = (np.nan, np.nan)  # last sample (t, fz - baseline)
         self._touchdown_s: float | None = None
         self._touchdown_cut = False
+        self._touchdown_cut_why = "start of recording"
         self._baseline_before = float("nan")
         self._dip_start: tuple[float, float] | None = None  # (crossing time, baseline) of a candidate take-off
         self._dip_samples: list[tuple[float, float]] = []
@@ -387,6 +400,9 @@ class StanceDetector:
 
     def _feed(self, t: float, f: float, events: list[ContactEvent]) -> list[tuple[float, float]] | None:
         """One sample; returns the samples to run again after a detector failure, else None."""
+        if self._state == "stance" and t - self._prev[0] > self.options.min_flight_s + _STAMP_TOLERANCE_S:
+            self._cut_by_loss(t, f, events)
+            return None
         self._step(t, f, events)
         if self._state == "stance":
             samples = self._stance_samples
@@ -447,6 +463,34 @@ class StanceDetector:
         self._reset(level, at_start=cut, rerun=True)
         return replay
 
+    def _cut_by_loss(self, t: float, f: float, events: list[ContactEvent]) -> None:
+        """Force samples missing from ``self._prev[0]`` to ``t`` inside a stance, long enough to hide a flight.
+
+        The stance ends at the last sample before the gap (cut by message
+        loss); the sample at ``t`` starts afresh with the baseline in use:
+        flight below the take-off level, else a stance cut at its start by
+        the same loss (module docstring, "Message loss").
+        """
+        last = self._prev[0]
+        events.append(ContactEvent("takeoff", last, self._baseline, cut=True))
+        self._record_stance(self._touchdown_s, last, cut_start=self._touchdown_cut, cut_end=True,
+                            cut_why=f"a {t - last:.3f} s force gap (message loss)")
+        self._finish_pending()
+        self._dip_start = None
+        self._dip_samples = []
+        self._stance_samples.clear()
+        if f - self._baseline < self._to_level:
+            self._enter_flight(t)
+            self._flight_start_s = t - 2 * self.options.settle_s  # the baseline is known: use these samples
+            self._update_flight_baseline(t, f)
+        else:
+            self._state = "stance"
+            self._touchdown_s = t
+            self._touchdown_cut = True
+            self._touchdown_cut_why = f"a {t - last:.3f} s force gap (message loss)"
+            self._stance_samples.append((t, f))
+        self._prev = (t, f - self._baseline)
+
     def _start(self, t: float, f: float) -> None:
         """First sample (of the recording, or of a re-run after a failure)."""
         opt = self.options
@@ -465,6 +509,7 @@ class StanceDetector:
             self._state = "stance"
             self._touchdown_s = t
             self._touchdown_cut = self._at_start
+            self._touchdown_cut_why = "start of recording"
             self._baseline_before = self._baseline
         self._prev = (t, f - self._baseline)
 
@@ -488,6 +533,7 @@ class StanceDetector:
                 self._state = "stance"
                 self._touchdown_s = td
                 self._touchdown_cut = no_baseline
+                self._touchdown_cut_why = "start of recording"
                 self._baseline_before = self._baseline
                 self._stance_samples.clear()
                 if not no_baseline:
@@ -561,12 +607,12 @@ class StanceDetector:
             self.stances.append(replace(s, baseline_after_n=after))
             self._pending_after = None
 
-    def _record_stance(self, td: float, to: float, cut_start: bool, cut_end: bool) -> None:
+    def _record_stance(self, td: float, to: float, cut_start: bool, cut_end: bool, cut_why: str | None = None) -> None:
         reason = None
         if cut_start:
-            reason = "incomplete: cut by start of recording"
+            reason = f"incomplete: cut by {self._touchdown_cut_why}"
         elif cut_end:
-            reason = "incomplete: cut by end of recording"
+            reason = f"incomplete: cut by {cut_why or 'end of recording'}"
         elif to - td < self.options.min_stance_s:
             reason = f"too short: {to - td:.3f} s < {self.options.min_stance_s:.3f} s"
         self._pending_after = Stance(

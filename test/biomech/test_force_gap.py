@@ -41,8 +41,12 @@ def test_gap_stance_rejected_as_message_loss_others_unchanged(rec, clean):
     holed = analyze_recording(bad.gap(rec, start, 1.0, markers=False))
     assert not any("detector failure" in w for w in holed.warnings)  # a gap is not a wrong baseline
     lost = [s for s in holed.stances if s.rejection_reason is not None]
-    assert len(lost) == 1 and "(message loss)" in lost[0].rejection_reason
-    assert lost[0].touchdown_s == clean.stances[3].touchdown_s < start < lost[0].takeoff_s
+    # the stance ends at the gap (never bridged over it: two stances must not merge); the gap ends in
+    # stance or flight, and a stance cut at its start by the gap is a second rejected row
+    assert 1 <= len(lost) <= 2 and all("(message loss)" in s.rejection_reason for s in lost)
+    assert lost[0].touchdown_s == clean.stances[3].touchdown_s < lost[0].takeoff_s < start
+    assert lost[0].rejection_reason.startswith("incomplete: cut by a 1.00")
+    assert all(s.takeoff_s < start or s.touchdown_s >= start + 1.0 - 1e-3 for s in holed.stances)
     # every stance that does not touch the gap [start, start + 1 s] is found again with the same events and data
     outside = [c for c in clean.stances if c.takeoff_s < start or c.touchdown_s > start + 1.0]
     accepted = [s for s in holed.stances if s.rejection_reason is None]
@@ -64,15 +68,19 @@ def test_long_gaps_run_without_recursion(rec, clean):
         for length in (1.0, 2.5):
             keep = ~((t >= start) & (t < start + length))
             stances = detect_stances(t[keep], fz[keep], body_weight_n=bw)
-            before = [s for s in stances if s.takeoff_s < start]
+            before = [s for s in stances if s.takeoff_s < start and not s.cut_end]
             assert [s.touchdown_s for s in before] == [s.touchdown_s for s in clean.stances[:3]]
-            around = [s for s in stances if s.touchdown_s < start < s.takeoff_s]
-            assert len(around) == 1  # the stance with the gap is one stance, bridged (and rejected by analysis)
-    # 18 s missing from inside a stance, flight after it: one bridged stance, no failure re-run
+            assert not [s for s in stances if s.touchdown_s < start < s.takeoff_s]  # never bridged over the gap
+            cut = [s for s in stances if s.touchdown_s < start and s.cut_end]
+            assert len(cut) == 1 and "force gap (message loss)" in cut[0].rejection_reason
+    # 18 s missing from inside a stance, stance then flight after it: the stance ends at the gap, the part after
+    # it is a stance cut at its start by the gap; no failure re-run
     tt = np.concatenate([np.arange(0, 1.0, 1e-3), np.arange(19.0, 20.0, 1e-3)])
     ff = np.where(((tt > 0.3) & (tt < 0.5)) | ((tt > 0.8) & (tt < 19.2)), 2 * bw, 0.0)
     stances = detect_stances(tt, ff, body_weight_n=bw)
-    assert [(round(s.touchdown_s, 2), round(s.takeoff_s, 2)) for s in stances] == [(0.3, 0.5), (0.8, 19.2)]
+    assert [(round(s.touchdown_s, 2), round(s.takeoff_s, 2)) for s in stances] == [(0.3, 0.5), (0.8, 1.0), (19.0, 19.2)]
+    assert [s.rejection_reason for s in stances] == [
+        None, "incomplete: cut by a 18.001 s force gap (message loss)", "incomplete: cut by a 18.001 s force gap (message loss)"]
 
 
 def test_analyze_cli_exit_zero_and_reason_in_json(tmp_path, rec, clean, capsys):
