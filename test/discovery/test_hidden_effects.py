@@ -87,7 +87,9 @@ def test_push_off_size_is_the_stated_share_of_the_ankle_peak():
                         ground_law("rigid"))
     push = law.parts[1]
     _, st = _nominal(law)
-    assert push.amplitude_nm[0] == pytest.approx(0.3 * st.moments_nm[:, 0].max(), rel=1e-6)
+    # the sizing and this check each integrate the nominal stance (LSODA, rtol 1e-6, different t_max): they agree
+    # to the integrator's accuracy, not to round-off (5.7e-6 relative with scipy 1.17.1)
+    assert push.amplitude_nm[0] == pytest.approx(0.3 * st.moments_nm[:, 0].max(), rel=1e-4)
     assert push.amplitude_nm / push.amplitude_nm[0] == pytest.approx([1.0, 0.6, 0.3])
     assert (push.onset_s, push.duration_s) == pytest.approx((0.35 * ts, 0.6 * ts))
 
