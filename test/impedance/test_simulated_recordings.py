@@ -108,11 +108,12 @@ CUTOFF_HZ = {"clean": 40.0, "noisy": 12.0}
 TOLERANCE = {"clean": 0.02, "noisy": 0.10}
 
 #: (noise, frequency, joint) -> measured worst |median error| of k0/k1 where the target is missed
-#: (``bench/recovery_errors.py``, 2026-11-21; causes in the module docstring).
+#: (``bench/recovery_errors.py``, 2026-11-24; causes in the module docstring). The 1.53 Hz noisy hip
+#: (k0 -5.6 %, k1 +11.1 % on 2026-11-21) now meets its target: k0 -7.8 %, k1 +8.1 % since the body model is
+#: scaled from the first second of marker frames (043e470) and the detector's levels are relative to body weight.
 MISSED_TARGETS = {
-    ("clean", 1.53, "hip"): 0.038,  # take-off transient (k0 +1.5 %, k1 -3.8 %)
-    ("noisy", 1.53, "hip"): 0.111,  # take-off transient, plus noise (k0 -5.6 %, k1 +11.1 %)
-    ("noisy", 2.20, "hip"): 0.303,  # marker noise in mid-stance (k0 +12.7 %, k1 -30.3 %; per-stance SD of k1 73 %)
+    ("clean", 1.53, "hip"): 0.037,  # take-off transient (k0 +1.3 %, k1 -3.7 %)
+    ("noisy", 2.20, "hip"): 0.309,  # marker noise in mid-stance (k0 +12.7 %, k1 -30.9 %; per-stance SD of k1 72 %)
 }
 
 
