@@ -34,6 +34,9 @@ Usage: .venv/bin/python bench/discovery_hit_rates.py [--seeds N] [--null-seeds N
        [--sizes rate_fraction=0.25,...] [--freqs 2.2] [--unique-gains]
        [--strict-cases null,angle_dependent_stiffness,... --strict-seeds N --strict-null-seeds N] [--foreign DIR]
 Prints one line per run and the table (markdown) at the end.
+``--scheduler local`` (the embedded cluster of ``hop-impedance batch``) or ``--scheduler tcp://HOST:8786``
+runs one Dask task per case and seed through :func:`hop_impedance.batch.runner.cluster_map`, discovery
+with one process per task; the lines of each run print in the serial order once all are back.
 """
 
 from __future__ import annotations
@@ -155,39 +158,78 @@ def main() -> None:
     ap.add_argument("--foreign", default="", help="also score the truth-labelled recordings in this folder "
                                                   "(e.g. ../shared/foreign)")
     ap.add_argument("--freqs", default="", help="hop frequencies to cycle over (Hz), e.g. 2.2 (default: per case)")
+    ap.add_argument("--scheduler", metavar="ADDRESS",
+                    help="one Dask task per case and seed (simulator and second-generator cases): 'local' for the "
+                         "embedded cluster of hop-impedance batch, or tcp://HOST:8786; discovery uses one process "
+                         "per task")
     args = ap.parse_args()
     sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})
     freqs = tuple(float(f) for f in args.freqs.split(",") if f) or None
-    rows = []
-    for name in filter(None, args.cases.split(",")):
-        expected = CASES[name][3]
-        tally = new_tally()
-        for seed in range(args.null_seeds if name == "null" else args.seeds):
-            try:
-                rec, freq = generate(name, seed, args.hops, sizes, freqs)
-            except ValueError as exc:
-                tally["gen_fail"] += 1
-                print(f"{name} seed {seed}: generation failed: {exc}", flush=True)
-                continue
-            run_one(rec, f"{name:28s} seed {seed} f={freq}", expected, tally)
-            if args.unique_gains:
-                print("    unique held-out gain over the other two look-alikes: " + "; ".join(
-                    f"{e} {g:+.5f} (p {p:.3f})" for e, (g, p) in unique_gains(rec).items()), flush=True)
-        rows.append((("simulator", name), tally))
-    for name in filter(None, args.strict_cases.split(",")):
-        expected, tally = set(STRICT_CASES[name].effects), new_tally()
-        for seed in range(args.strict_null_seeds if name == "null" else args.strict_seeds):
-            try:
-                rec, _ = strict_recording(replace(STRICT_CASES[name], seed=seed, hops=args.hops))
-            except ValueError as exc:
-                tally["gen_fail"] += 1
-                print(f"strict {name} seed {seed}: generation failed: {exc}", flush=True)
-                continue
-            run_one(rec, f"strict {name:21s} seed {seed}", expected, tally)
-        rows.append((("second generator", name), tally))
+    calls = [("simulator", name, seed, args.hops, sizes, freqs, args.unique_gains)
+             for name in filter(None, args.cases.split(","))
+             for seed in range(args.null_seeds if name == "null" else args.seeds)]
+    calls += [("second generator", name, seed, args.hops, sizes, freqs, False)
+              for name in filter(None, args.strict_cases.split(","))
+              for seed in range(args.strict_null_seeds if name == "null" else args.strict_seeds)]
+    tallies = {("simulator", n): new_tally() for n in filter(None, args.cases.split(","))}
+    tallies.update({("second generator", n): new_tally() for n in filter(None, args.strict_cases.split(","))})
+    if args.scheduler:
+        from hop_impedance.batch.runner import cluster_map
+
+        for call, (tally, text) in zip(calls, cluster_map(_case_run_captured, calls, mode=args.scheduler)):
+            print(text, end="", flush=True)
+            _add(tallies[call[:2]], tally)
+    else:
+        for call in calls:
+            _add(tallies[call[:2]], case_run(*call))
+    rows = list(tallies.items())
     if args.foreign:
         rows += foreign_rows(args.foreign)
     print_table(rows)
+
+
+def case_run(source: str, name: str, seed: int, hops: int, sizes: EffectSizes, freqs, unique: bool,
+             workers: int | None = None) -> dict:
+    """Generate one recording of a case (simulator or second generator), discover, return its tally."""
+    tally = new_tally()
+    if source == "simulator":
+        expected = CASES[name][3]
+        try:
+            rec, freq = generate(name, seed, hops, sizes, freqs)
+        except ValueError as exc:
+            tally["gen_fail"] += 1
+            print(f"{name} seed {seed}: generation failed: {exc}", flush=True)
+            return tally
+        run_one(rec, f"{name:28s} seed {seed} f={freq}", expected, tally, workers)
+        if unique:
+            print("    unique held-out gain over the other two look-alikes: " + "; ".join(
+                f"{e} {g:+.5f} (p {p:.3f})" for e, (g, p) in unique_gains(rec).items()), flush=True)
+        return tally
+    expected = set(STRICT_CASES[name].effects)
+    try:
+        rec, _ = strict_recording(replace(STRICT_CASES[name], seed=seed, hops=hops))
+    except ValueError as exc:
+        tally["gen_fail"] += 1
+        print(f"strict {name} seed {seed}: generation failed: {exc}", flush=True)
+        return tally
+    run_one(rec, f"strict {name:21s} seed {seed}", expected, tally, workers)
+    return tally
+
+
+def _case_run_captured(*call) -> tuple[dict, str]:
+    """:func:`case_run` in a Dask task: one process (the cluster runs one task per core), printout returned."""
+    import contextlib
+    import io
+
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        tally = case_run(*call, workers=1)
+    return tally, text.getvalue()
+
+
+def _add(total: dict, tally: dict) -> None:
+    for k, v in tally.items():
+        total[k] += v
 
 
 def new_tally() -> dict:
@@ -195,11 +237,11 @@ def new_tally() -> dict:
             "steps": 0, "steps_not_shrinking": 0}
 
 
-def run_one(rec, label: str, expected: set, tally: dict) -> None:
+def run_one(rec, label: str, expected: set, tally: dict, workers: int | None = None) -> None:
     """Discover on one recording and add its flags to ``tally`` (a refusal counts as a miss)."""
     t0 = time.perf_counter()
     try:
-        doc = discover(rec)
+        doc = discover(rec, workers=workers)
     except ValueError as exc:
         tally["runs"] += 1
         tally["extra"] += not expected  # a null that cannot be judged is not a correct "none"
