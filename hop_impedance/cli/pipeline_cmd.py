@@ -21,6 +21,8 @@ def add_pipeline_arguments(p: argparse.ArgumentParser, default_recording: str | 
     p.add_argument("--no-frames", action="store_true", help="do not publish per-frame /joint_kinetics")
     p.add_argument("--params-file", help="ROS 2 YAML parameter file (e.g. config/pipeline.yaml)")
     p.add_argument("--timeout", type=float, default=120.0, help="give up after this many seconds [120]")
+    p.add_argument("--json", metavar="OUT", help="also write every stance's row, the losses and the exit status as JSON "
+                                                "('-' for stdout; docs/pipeline.md)")
     p.add_argument("--tolerate-loss", action="store_true",
                    help="exit 0 even when input messages were lost on the way (they are still reported)")
 
@@ -137,8 +139,45 @@ def input_notes(report) -> list[str]:
     return out
 
 
+def pipeline_document(report, recording: str, exit_status: int) -> dict:
+    """The run as a JSON-ready dict: one row per stance the nodes reported (accepted or rejected, with the
+    reason), the messages each consumer received against the file, the input-check lines and the exit status."""
+    from hop_impedance.io.mcap_io import summarize
+    from hop_impedance.nodes.common import stamp_ns
+    from hop_impedance.nodes.runner import _consumer_counts
+
+    def num(x: float) -> float | None:
+        return float(x) if x == x else None
+
+    rows = []
+    for s in sorted(report.summaries, key=lambda s: stamp_ns(s.touchdown_stamp)):
+        rows.append({
+            "stance_index": int(s.stance_index), "touchdown_stamp_ns": stamp_ns(s.touchdown_stamp),
+            "takeoff_stamp_ns": stamp_ns(s.takeoff_stamp), "contact_time_s": num(s.contact_time_s),
+            "complete": bool(s.complete), "rejection_reason": s.rejection_reason or None,
+            "accepted": [bool(a) for a in s.accepted], "k0": [num(x) for x in s.k0], "k1": [num(x) for x in s.k1],
+            "r_squared": [num(x) for x in s.r_squared],
+            "force_samples_lost_before": int(s.force_samples_lost_before),
+            "force_samples_lost_in_stance": int(s.force_samples_lost_in_stance),
+        })
+    counts = {i.topic: i.count for i in summarize(recording)}
+    received = [{"node": node, "topic": topic, "received": got, "in_file": sent}
+                for node, topic, got, sent in _consumer_counts(report, counts)]
+    return {"recording": recording, "exit_status": exit_status, "finished": bool(report.finished),
+            "died": report.died or None, "stances": rows, "received": received, "input_checks": input_notes(report),
+            "output_mcap": str(report.output_mcap)}
+
+
 def run(args: argparse.Namespace) -> int:
+    import json
+
+    from hop_impedance.cli.json_output import json_output
     from hop_impedance.nodes.runner import run_pipeline
 
     report = run_pipeline(config_from_args(args))
-    return print_report(report, args.recording, args.tolerate_loss)
+    if not args.json:
+        return print_report(report, args.recording, args.tolerate_loss)
+    with json_output(args.json) as write_json:
+        code = print_report(report, args.recording, args.tolerate_loss)
+        write_json(json.dumps(pipeline_document(report, args.recording, code), indent=1, allow_nan=False))
+    return code
