@@ -3,8 +3,7 @@
 :func:`analyze_item` is a plain function of (item, options): the serial path
 calls it in the command's process, Dask workers call it remotely; nothing here
 imports Dask. It runs the steps of ``hop-impedance analyze REC --json OUT``
-with the same functions (``load_recording``, ``_subject``, ``check_recording``,
-``analyze_recording``, ``analysis_to_json``, ``add_fits_to_json``,
+through the same functions (``analyze_cmd.checked_recording``, ``analyze_cmd.analyze_and_fit``,
 ``json.dumps(..., allow_nan=False)``), so the JSON text is the same byte for
 byte (test/batch checks it against the command), and returns it with the tidy stance x joint rows and
 the usable fits (for the population tables and figures).
@@ -251,21 +250,12 @@ def tidy_rows(analysis, fits) -> list[dict]:
 
 def _analyze(item, options: BatchOptions) -> Outcome:
     from hop_impedance import __version__
-    from hop_impedance.biomech.analysis import analysis_to_json, analyze_recording
-    from hop_impedance.cli.analyze_cmd import _subject, add_fits_to_json, condition_label
-    from hop_impedance.input_checks import InputChecks
-    from hop_impedance.io.recording_io import check_recording, load_recording
+    from hop_impedance.cli.analyze_cmd import analyze_and_fit, checked_recording, condition_label
 
-    rec = load_recording(item.path)
+    # analyze's own steps: a recording analyze refuses fails here too, and the JSON is analyze's
     flags = SimpleNamespace(mass_kg=item.mass_kg, height_m=item.height_m, sex=item.sex)
-    rec = replace(rec, subject=_subject(rec, flags, item.path))
-    # analyze's contract checks with the subject in use and the cut-off: a recording analyze refuses fails here too
-    checks = InputChecks(cutoff_hz=options.cutoff_hz)
-    checks.set_subject(rec.subject)
-    check_recording(checks, rec.force, rec.markers)
-    analysis = analyze_recording(rec, options.analysis_options())
-    doc = analysis_to_json(analysis)
-    fits = add_fits_to_json(doc, analysis, list(options.model_terms) or None)
+    rec, _ = checked_recording(item.path, flags, options.cutoff_hz)
+    analysis, doc, fits = analyze_and_fit(rec, options.analysis_options(), list(options.model_terms) or None)
     return Outcome(
         name=item.name,
         json_text=json.dumps(doc, indent=options.indent, allow_nan=False),

@@ -118,6 +118,39 @@ def condition_label(analysis, path: str, taken: list[str]) -> str:
     return label
 
 
+def checked_recording(path: str, flags, cutoff_hz: float, per_leg: bool = False):
+    """A recording as ``analyze`` takes it: loaded (v2 per-leg view if ``per_leg``), with the subject in use
+    (the file's /subject or ``flags.mass_kg/height_m/sex``) and the shared contract checks run again with that
+    subject and the cut-off (rates rule). ``hop-impedance batch`` runs the same steps through this function.
+
+    Returns
+    -------
+    (Recording, BilateralRecording or None)
+    """
+    from dataclasses import replace
+
+    from hop_impedance.bilateral import load_bilateral
+    from hop_impedance.input_checks import InputChecks
+    from hop_impedance.io.recording_io import check_recording, load_recording
+
+    bilateral = load_bilateral(path) if per_leg else None
+    rec = bilateral.recording if bilateral is not None else load_recording(path)
+    rec = replace(rec, subject=_subject(rec, flags, path))
+    checks = InputChecks(cutoff_hz=cutoff_hz)
+    checks.set_subject(rec.subject)
+    check_recording(checks, rec.force, rec.markers)
+    return rec, bilateral
+
+
+def analyze_and_fit(rec, options, model_terms: list[str] | None, fit: bool = True):
+    """``analyze``'s analysis of one checked recording: (RecordingAnalysis, JSON dict, per-stance fits or None)."""
+    from hop_impedance.biomech.analysis import analysis_to_json, analyze_recording
+
+    analysis = analyze_recording(rec, options)
+    doc = analysis_to_json(analysis)
+    return analysis, doc, (add_fits_to_json(doc, analysis, model_terms) if fit else None)
+
+
 def run(args: argparse.Namespace) -> int:
     """Load, analyse, write the JSON; print a one-line summary on stderr."""
     import json
@@ -125,15 +158,12 @@ def run(args: argparse.Namespace) -> int:
     import sys
     from dataclasses import replace
 
-    from hop_impedance.bilateral import load_bilateral
-    from hop_impedance.biomech.analysis import AnalysisOptions, analysis_to_json, analyze_recording
+    from hop_impedance.biomech.analysis import AnalysisOptions
     from hop_impedance.biomech.body_model import load_overrides
     from hop_impedance.biomech.per_leg import analyses_to_json, analyze_legs
     from hop_impedance.biomech.stance_detection import DetectorOptions
     from hop_impedance.cli.json_output import json_output
     from hop_impedance.impedance.report import fit_records, write_report
-    from hop_impedance.input_checks import InputChecks
-    from hop_impedance.io.recording_io import check_recording, load_recording
 
     if not args.cutoff_hz > 0:
         raise ValueError(f"--cutoff-hz must be > 0, got {args.cutoff_hz}")
@@ -152,26 +182,19 @@ def run(args: argparse.Namespace) -> int:
     )
     with json_output(args.json) as write_json:
         docs, records, conditions = [], [], []
+        terms = args.model_terms.split(",") if args.model_terms else None
         for path in args.recordings:
-            bilateral = load_bilateral(path) if args.per_leg else None
-            rec = bilateral.recording if bilateral is not None else load_recording(path)
-            rec = replace(rec, subject=_subject(rec, args, path))
-            # The shared contract checks again with the subject in use and the cut-off (rates rule).
-            checks = InputChecks(cutoff_hz=min(options.marker_cutoff_hz, options.force_cutoff_hz))
-            checks.set_subject(rec.subject)
-            check_recording(checks, rec.force, rec.markers)
+            rec, bilateral = checked_recording(path, args, min(options.marker_cutoff_hz, options.force_cutoff_hz),
+                                               args.per_leg)
             for warning in rec.warnings:
                 named = warning if warning.startswith(f"{os.path.basename(path)}:") else f"{path}: {warning}"
                 print(f"hop-impedance analyze: warning: {named}", file=sys.stderr)
             if bilateral is not None:
-                terms = args.model_terms.split(",") if args.model_terms else None
                 fits = None if args.no_fit else (lambda d, a: add_fits_to_json(d, a, terms))
                 docs.append(analyses_to_json(analyze_legs(replace(bilateral, recording=rec), options), fits))
                 continue
-            analysis = analyze_recording(rec, options)
-            doc = analysis_to_json(analysis)
-            if not args.no_fit:
-                fits = add_fits_to_json(doc, analysis, args.model_terms.split(",") if args.model_terms else None)
+            analysis, doc, fits = analyze_and_fit(rec, options, terms, fit=not args.no_fit)
+            if fits is not None:
                 label = condition_label(analysis, path, conditions)
                 conditions.append(label)
                 records += fit_records(fits, label, analysis.subject.subject_id)
