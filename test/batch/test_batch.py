@@ -123,7 +123,9 @@ def test_worker_killed_mid_run_loses_nothing(serial, inputs, client, tmp_path):
     assert sum(1 for entry in story if entry[0] == killed["key"] and entry[2] == "processing") >= 2
     # ... and nothing was lost: same outputs as serial, none of them from the killed process
     assert summary.analysed == 5 and summary.failed == 2
-    assert killed["pid"] not in {o.pid for o in summary.outcomes.values()}
+    # (the killed worker may have finished other tasks before it was killed: those results were delivered)
+    redone = [o for name, o in summary.outcomes.items() if killed["key"].startswith(f"hop-impedance-batch-{name}-")]
+    assert len(redone) == 1 and redone[0].pid != killed["pid"] and redone[0].error is None
     a, b = _tree(out), _tree(tmp_path)
     assert [k for k in a if a.get(k) != b.get(k)] == [] and sorted(a) == sorted(b)
     client.wait_for_workers(2, timeout=60)  # the nanny restarted it
