@@ -1,8 +1,9 @@
 """Shipped marker maps on real C3D files that public repositories ship (none written by us).
 
 The files are not committed (they are other projects' data): the tests read
-them from the repository snapshots under /work/.mirror (brought by the
-session's ``fetch``) and skip where those are absent, as on a fresh CI machine.
+them from ../shared/data_candidates when a copy is there, else from the repository
+snapshots under /work/.mirror (brought by the session's ``fetch``), and skip where
+neither is present, as on a fresh CI machine.
 No PyPI package ships a Plug-in Gait or Qualisys C3D (checked: pyCGM, pyCGM2
 sdist, kineticstoolkit, pyomeca, c3d, c3d-parser, gaitalytics).
 
@@ -38,8 +39,16 @@ QUALISYS = (
 HIP = MARKER_NAMES.index("hip")
 
 
+#: Real data files the project's steering puts beside the repository (read-only); a copy of either file
+#: there (any sub-folder, same file name) is used before the fetched snapshot, so CI can run these tests.
+SHARED_DATA = Path(__file__).resolve().parents[3] / "shared" / "data_candidates"
+
+
 def _fetched(tmp_path_factory, source) -> Path:
     repo, commit, path = source
+    shipped = sorted(SHARED_DATA.rglob(Path(path).name)) if SHARED_DATA.is_dir() else []
+    if shipped:
+        return shipped[0]
     git_dir = MIRROR / repo / "repo"
     if not git_dir.exists():
         pytest.skip(f"{repo} snapshot not on this machine (fetch github:{repo.replace('+', '/')})")
