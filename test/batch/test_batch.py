@@ -105,10 +105,9 @@ def test_worker_killed_mid_run_loses_nothing(serial, inputs, client, tmp_path):
         while time.monotonic() < deadline:
             busy = {w: ks for w, ks in client.processing().items() if ks}
             if busy:
-                time.sleep(0.2)  # inside the task (one takes ~0.7 s)
                 worker, keys = next(iter(busy.items()))
                 pid = client.run(os.getpid, workers=[worker])[worker]
-                killed.update(pid=pid, key=keys[0])
+                killed.update(pid=pid, keys=list(keys))  # running or queued on that worker
                 os.kill(pid, signal.SIGKILL)
                 return
             time.sleep(0.01)
@@ -118,14 +117,16 @@ def test_worker_killed_mid_run_loses_nothing(serial, inputs, client, tmp_path):
     summary = run_batch(collect_items([str(inputs)]), tmp_path, client=client, progress_stream=io.StringIO())
     killer.join()
     assert killed, "no task was seen running"
-    # the scheduler sent the killed worker's task out a second time ...
-    story = client.run_on_scheduler(lambda dask_scheduler, key=killed["key"]: dask_scheduler.story(key))
-    assert sum(1 for entry in story if entry[0] == killed["key"] and entry[2] == "processing") >= 2
-    # ... and nothing was lost: same outputs as serial, none of them from the killed process
+    # the scheduler sent the killed worker's unfinished task(s) out a second time ...
+    # (a task it held may have finished just before the kill: that result was delivered, and is not redone)
+    story = client.run_on_scheduler(lambda dask_scheduler, keys=killed["keys"]: dask_scheduler.story(*keys))
+    redone = [k for k in killed["keys"] if sum(1 for e in story if e[0] == k and e[2] == "processing") >= 2]
+    assert redone, f"no task of the killed worker was sent out again: {killed['keys']}"
+    # ... and nothing was lost: same outputs as serial, the redone ones computed by another worker
     assert summary.analysed == 5 and summary.failed == 2
-    # (the killed worker may have finished other tasks before it was killed: those results were delivered)
-    redone = [o for name, o in summary.outcomes.items() if killed["key"].startswith(f"hop-impedance-batch-{name}-")]
-    assert len(redone) == 1 and redone[0].pid != killed["pid"] and redone[0].error is None
+    for key in redone:  # an analysed recording's result came from a live worker (a broken one's is in failures.csv)
+        outcome = [o for name, o in summary.outcomes.items() if key.startswith(f"hop-impedance-batch-{name}-")]
+        assert len(outcome) <= 1 and all(o.pid != killed["pid"] and o.error is None for o in outcome)
     a, b = _tree(out), _tree(tmp_path)
     assert [k for k in a if a.get(k) != b.get(k)] == [] and sorted(a) == sorted(b)
     client.wait_for_workers(2, timeout=60)  # the nanny restarted it
