@@ -402,8 +402,8 @@ class StanceDetector:
         """One sample; returns the samples to run again after a detector failure, else None."""
         if self._state == "stance" and t - self._prev[0] > self.options.min_flight_s + _STAMP_TOLERANCE_S:
             self._cut_by_loss(t, f, events)
-            return None
-        self._step(t, f, events)
+        else:
+            self._step(t, f, events)
         if self._state == "stance":
             samples = self._stance_samples
             if samples and t - samples[-1][0] > self.options.steady_s:
@@ -479,17 +479,8 @@ class StanceDetector:
         self._dip_start = None
         self._dip_samples = []
         self._stance_samples.clear()
-        if f - self._baseline < self._to_level:
-            self._enter_flight(t)
-            self._flight_start_s = t - 2 * self.options.settle_s  # the baseline is known: use these samples
-            self._update_flight_baseline(t, f)
-        else:
-            self._state = "stance"
-            self._touchdown_s = t
-            self._touchdown_cut = True
-            self._touchdown_cut_why = f"a {t - last:.3f} s force gap (message loss)"
-            self._stance_samples.append((t, f))
-        self._prev = (t, f - self._baseline)
+        self._begin(t, f, f - self._baseline < self._to_level, cut=True,
+                    cut_why=f"a {t - last:.3f} s force gap (message loss)")
 
     def _start(self, t: float, f: float) -> None:
         """First sample (of the recording, or of a re-run after a failure)."""
@@ -500,16 +491,23 @@ class StanceDetector:
             flight = f < max(opt.start_flight_max_n, opt.start_flight_max_bw * bw)
         else:  # a re-run: the baseline was just measured
             flight = f - self._baseline < self._to_level
+        self._begin(t, f, flight, cut=self._at_start, cut_why="start of recording")
+
+    def _begin(self, t: float, f: float, flight: bool, cut: bool, cut_why: str) -> None:
+        """Enter flight or stance at sample ``t`` with no edge seen (first sample, re-run, after a force gap).
+
+        A stance begun here is cut at its start (``cut``) by ``cut_why``.
+        """
         if flight:
             self._enter_flight(t)
             self._initial_flight = True
-            self._flight_start_s = t - 2 * opt.settle_s  # no take-off ringing to wait for
+            self._flight_start_s = t - 2 * self.options.settle_s  # no take-off ringing to wait for
             self._update_flight_baseline(t, f)
         else:
             self._state = "stance"
             self._touchdown_s = t
-            self._touchdown_cut = self._at_start
-            self._touchdown_cut_why = "start of recording"
+            self._touchdown_cut = cut
+            self._touchdown_cut_why = cut_why
             self._baseline_before = self._baseline
         self._prev = (t, f - self._baseline)
 
