@@ -30,6 +30,16 @@ Rules (defaults in :class:`DetectorOptions`, the one place they are set)
 - STANCE -> FLIGHT when Fz - baseline stays below the take-off level for
   ``min_flight_s`` (0.05 s); shorter dips are not flights. The take-off event
   is therefore emitted ``min_flight_s`` late.
+- **Provisional take-off.** Once the force has stayed below the take-off
+  level for ``provisional_s`` (5 ms), a ``takeoff_provisional`` event is
+  emitted at once, with the same (interpolated) take-off instant the
+  confirmed event will carry, and :attr:`StanceDetector.provisional_stance`
+  holds the stance it ends. If the force rises above the touchdown level
+  again before ``min_flight_s`` (a dip, not a flight), a ``takeoff_withdrawn``
+  event says so and the stance goes on. Consumers that act at take-off (the
+  controller feed, issue 15) analyse the provisional stance and withdraw
+  what they published on a withdrawal; the stances themselves (and so the
+  offline analysis) are those of the confirmed take-offs only.
 - **Detector failure.** A "stance" longer than ``max_stance_s`` (1.0 s; a
   hopping or drop-jump contact lasts 0.15-0.8 s) whose force over the last
   ``steady_s`` (0.1 s) is steady (SD below ``max(steady_sd_n, 3 sd)``) and far
@@ -103,6 +113,10 @@ class DetectorOptions:
         Shorter stances are rejected ("too short").
     min_flight_s : float
         A dip below the take-off level must last this long to count as flight (s).
+    provisional_s : float
+        After this long below the take-off level a take-off is announced
+        provisionally (s, at most ``min_flight_s``); withdrawn if the force
+        comes back within ``min_flight_s``.
     settle_s : float
         Flight samples closer than this to the take-off are not used for the
         baseline (s) (plate ringing).
@@ -128,6 +142,7 @@ class DetectorOptions:
     event_level_n: float | None = None
     min_stance_s: float = 0.08
     min_flight_s: float = 0.05
+    provisional_s: float = 0.005
     settle_s: float = 0.02
     max_stance_s: float = 1.0
     steady_s: float = 0.1
@@ -146,6 +161,8 @@ class DetectorOptions:
                              f"{self.touchdown_bw}, {self.takeoff_bw}, {self.noise_factor}")
         if min(self.min_flight_s, self.min_stance_s, self.settle_s) < 0:
             raise ValueError("min_flight_s, min_stance_s and settle_s must be >= 0 s")
+        if not 0 <= self.provisional_s <= self.min_flight_s:
+            raise ValueError(f"need 0 <= provisional_s <= min_flight_s, got {self.provisional_s} and {self.min_flight_s}")
         if not self.max_stance_s > self.steady_s > 0:
             raise ValueError(f"need max_stance_s > steady_s > 0 s, got {self.max_stance_s} and {self.steady_s}")
 
@@ -188,7 +205,10 @@ class ContactEvent:
     Attributes
     ----------
     kind : str
-        ``"touchdown"`` or ``"takeoff"``.
+        ``"touchdown"``, ``"takeoff"`` (confirmed), ``"takeoff_provisional"``
+        (announced after ``provisional_s`` below the level) or
+        ``"takeoff_withdrawn"`` (the provisional one was a dip; ``time_s`` is
+        when the force came back).
     time_s : float
         Sub-sample instant (s, same clock as the input ``t``).
     baseline_n : float
@@ -292,6 +312,9 @@ class StanceDetector:
         self.warnings: list[str] = []
         self._last_t = np.nan
         self._noise_sd = 0.0
+        #: The first take-off announced (provisional or confirmed, even if later withdrawn; s), NaN before.
+        #: The body model is scaled from the marker frames up to it (analysis.calibration_markers).
+        self.first_takeoff_s = np.nan
         self._reset(0.0, at_start=True)
 
     def _reset(self, baseline_n: float, at_start: bool, rerun: bool = False) -> None:
@@ -312,6 +335,7 @@ class StanceDetector:
         self._dip_start: tuple[float, float] | None = None  # (crossing time, baseline) of a candidate take-off
         self._dip_samples: list[tuple[float, float]] = []
         self._pending_after: Stance | None = None  # stance waiting for the next flight's baseline
+        self._provisional: Stance | None = None  # stance of an announced, not yet confirmed take-off
         self._rise_s: float | None = None  # last upward crossing of the event level during flight
         self._stance_samples: collections.deque = collections.deque()  # raw (t, f) since the stance began
         self._first_t = np.nan
@@ -342,6 +366,15 @@ class StanceDetector:
         its take-off events) read it from here.
         """
         return self._pending_after
+
+    @property
+    def provisional_stance(self) -> Stance | None:
+        """The stance ended by a provisional take-off (``takeoff_provisional`` event), until confirmed or withdrawn.
+
+        Its fields are those the confirmed stance will have (same take-off
+        instant), except ``baseline_after_n`` (NaN).
+        """
+        return self._provisional
 
     def push(self, t_s: np.ndarray, fz_n: np.ndarray) -> list[ContactEvent]:
         """Feed samples; return the events they complete.
@@ -461,6 +494,8 @@ class StanceDetector:
             f"as {level:.1f} N and the samples run again"
         )
         self._reset(level, at_start=cut, rerun=True)
+        if self.first_takeoff_s >= replay[0][0]:
+            self.first_takeoff_s = np.nan  # announced inside the false stance: void
         return replay
 
     def _cut_by_loss(self, t: float, f: float, events: list[ContactEvent]) -> None:
@@ -545,12 +580,16 @@ class StanceDetector:
                     self._dip_start = (self._crossing_time(t, rel), self._baseline)
                     self._dip_samples = [(t, f)]
             elif rel > self._td_level:
+                if self._provisional is not None:
+                    events.append(ContactEvent("takeoff_withdrawn", t, self._dip_start[1]))
+                    self._provisional = None
                 self._dip_start = None  # a short dip: still in stance
                 self._dip_samples = []
             else:
                 self._dip_samples.append((t, f))
                 if t - self._dip_start[0] >= opt.min_flight_s:
                     to = self._dip_start[0]
+                    self._provisional = None
                     events.append(ContactEvent("takeoff", to, self._dip_start[1]))
                     self._record_stance(self._touchdown_s, to, cut_start=self._touchdown_cut, cut_end=False)
                     self._enter_flight(to)
@@ -560,6 +599,12 @@ class StanceDetector:
                     self._dip_samples = []
                     self._stance_samples.clear()
                     rel = f - self._baseline
+                elif self._provisional is None and t - self._dip_start[0] >= opt.provisional_s - _STAMP_TOLERANCE_S:
+                    to = self._dip_start[0]
+                    self._provisional = self._stance(self._touchdown_s, to, cut_start=self._touchdown_cut, cut_end=False)
+                    if not np.isfinite(self.first_takeoff_s):
+                        self.first_takeoff_s = to
+                    events.append(ContactEvent("takeoff_provisional", to, self._dip_start[1]))
         self._prev = (t, rel)
 
     def _crossing_time(self, t: float, rel: float) -> float:
@@ -606,6 +651,12 @@ class StanceDetector:
             self._pending_after = None
 
     def _record_stance(self, td: float, to: float, cut_start: bool, cut_end: bool, cut_why: str | None = None) -> None:
+        self._provisional = None
+        self._pending_after = self._stance(td, to, cut_start, cut_end, cut_why)
+        if not np.isfinite(self.first_takeoff_s):
+            self.first_takeoff_s = to
+
+    def _stance(self, td: float, to: float, cut_start: bool, cut_end: bool, cut_why: str | None = None) -> Stance:
         reason = None
         if cut_start:
             reason = f"incomplete: cut by {self._touchdown_cut_why}"
@@ -613,7 +664,7 @@ class StanceDetector:
             reason = f"incomplete: cut by {cut_why or 'end of recording'}"
         elif to - td < self.options.min_stance_s:
             reason = f"too short: {to - td:.3f} s < {self.options.min_stance_s:.3f} s"
-        self._pending_after = Stance(
+        return Stance(
             td,
             to,
             not (cut_start or cut_end),

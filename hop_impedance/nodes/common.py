@@ -190,12 +190,25 @@ class InputTracker:
 
 
 class ReorderBuffer:
-    """Holds stamped items for ``window_ns`` of stamp time so out-of-order arrivals are sorted.
+    """Holds stamped items for up to ``window_ns`` of stamp time so out-of-order arrivals are sorted.
+
+    An item that continues the released stream without a hole (its stamp at
+    most 1.5 nominal periods after the last released one) is released at
+    once: in-order data never wait for the window, which is what a
+    controller's latency needs (issue 15: the 20 ms window used to delay every
+    take-off by 20 ms). Only behind a hole (a sample late or lost) do the
+    items wait, until the hole is filled or ``window_ns`` of newer stamps have
+    arrived. The nominal period is the median of the first
+    :data:`NOMINAL_STEPS` steps released through the window (before that,
+    every item waits for the window).
 
     ``add`` returns False (and counts ``dropped``) for an item older than (or
     as old as) the last released one: it arrived too late to be used in order,
     or is a duplicate of a released one.
     """
+
+    #: Released steps that set the nominal period.
+    NOMINAL_STEPS = 50
 
     def __init__(self, window_ns: int) -> None:
         self.window_ns = int(window_ns)
@@ -203,6 +216,8 @@ class ReorderBuffer:
         self.released_ns: int | None = None
         self.dropped = 0
         self.duplicates = 0
+        self.period_ns: int | None = None
+        self._steps: list[int] = []
 
     def add(self, ns: int, item) -> bool:
         if self.released_ns is not None and ns <= self.released_ns:
@@ -212,7 +227,8 @@ class ReorderBuffer:
         return True
 
     def release(self, everything: bool = False) -> list[tuple[int, object]]:
-        """Items older than newest - window (all with ``everything``), in stamp order, each stamp once.
+        """Items in stamp order, each stamp once: those older than newest - window (all with
+        ``everything``), then every following one that continues the stream without a hole.
 
         A repeated stamp (a duplicated message) keeps its first arrival and counts
         in ``duplicates``, as the offline loader drops it
@@ -226,13 +242,27 @@ class ReorderBuffer:
         n = 0
         while n < len(self.items) and self.items[n][0] <= limit:
             n += 1
+        if self.period_ns is None:
+            self._learn_period(([self.released_ns] if self.released_ns is not None else []) + [x[0] for x in self.items[:n]])
+        if self.period_ns is not None:
+            last = self.items[n - 1][0] if n else self.released_ns
+            max_step = self.period_ns * 3 // 2
+            while n < len(self.items) and last is not None and self.items[n][0] - last <= max_step:
+                last = self.items[n][0]
+                n += 1
         out, self.items = self.items[:n], self.items[n:]
         if out:
-            self.released_ns = out[-1][0]
             unique = [out[0]] + [b for a, b in zip(out, out[1:]) if b[0] != a[0]]
             self.duplicates += len(out) - len(unique)
             out = unique
+            self.released_ns = out[-1][0]
         return out
+
+    def _learn_period(self, stamps: list[int]) -> None:
+        self._steps += [b - a for a, b in zip(stamps, stamps[1:]) if b > a]
+        if len(self._steps) >= self.NOMINAL_STEPS:
+            self.period_ns = int(np.median(self._steps[: self.NOMINAL_STEPS]))
+            self._steps = []
 
 
 class InputGuard:

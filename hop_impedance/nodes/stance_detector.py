@@ -144,7 +144,14 @@ class StanceDetectorNode(Node):
         self.progress.publish()
 
     def _publish(self, ev) -> None:
-        """One StanceEvent; a take-off carries its stance's contact time, peak force and flight before."""
+        """One StanceEvent; a take-off carries its stance's contact time, peak force and flight before.
+
+        Provisional and withdrawn take-offs (the controller feed's early
+        announcement, see stance_detection) are not events of this topic:
+        it publishes the confirmed ones.
+        """
+        if ev.kind not in ("touchdown", "takeoff"):
+            return
         msg = StanceEvent(threshold_n=float(self.stage.detector.levels_n[1]), complete=True,
                           flight_time_before_s=math.nan)
         stances = list(self.stage.stances)
@@ -192,6 +199,7 @@ _DETECTOR_PARAMETERS = {
     "noise_factor": "take-off level at least this many flight-noise SDs (touchdown twice)",
     "min_stance_s": "shorter stances are rejected (s)",
     "min_flight_s": "a dip below the take-off level must last this long to be a flight (s)",
+    "provisional_s": "announce a take-off provisionally after this long below the level (s; withdrawn within min_flight_s)",
     "settle_s": "flight samples this close to take-off are left out of the baseline (s)",
     "max_stance_s": "a steady 'stance' far from body weight longer than this is a detector failure (s)",
     "steady_s": "window of the steadiness test (s)",
