@@ -22,7 +22,7 @@ setup:
 	@bash scripts/setup_env.sh
 
 demo: setup
-	@$(PY) -m hop_impedance.cli demo --recording $(DEMO_RECORDING) --out $(DEMO_OUT)
+	@$(PY) -m hop_impedance.cli demo $(DEMO_RECORDING) --out $(DEMO_OUT)
 
 test: setup
 	@$(PY) -m pytest -q

@@ -57,7 +57,7 @@ def generate(cache: Path) -> Path:
             lines.append(f"{name},{sid},{freq:.2f} Hz")
             if not (cache / name).exists():
                 jobs.append(["simulate", "--freq", str(freq), "--hops", str(HOPS), "--seed", str(100 + 10 * s + f),
-                             "--mass", str(mass), "--height", str(height), "--out", str(cache / name)])
+                             "--mass-kg", str(mass), "--height-m", str(height), "--out", str(cache / name)])
     if jobs:
         cache.mkdir(parents=True, exist_ok=True)
         print(f"simulating {len(jobs)} recordings into {cache} ...", file=sys.stderr)

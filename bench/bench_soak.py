@@ -72,7 +72,7 @@ def main() -> int:
     env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
     env.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     total_s = args.minutes * 60.0
-    cmd = [sys.executable, "-m", "hop_impedance.cli", "pipeline", "--recording", args.recording, "--out", args.out,
+    cmd = [sys.executable, "-m", "hop_impedance.cli", "pipeline", args.recording, "--out", args.out,
            "--processes", "--loop", "--rate", "1", "--timeout", str(total_s + 120), "--tolerate-loss"]
     print("running:", " ".join(cmd), flush=True)
     Path(args.out).mkdir(parents=True, exist_ok=True)

@@ -3,7 +3,7 @@
 # headless, on the CPU (no GPU or display needed).
 #   1. installs Debian's CPU Vulkan driver (mesa-vulkan-drivers, libvulkan1) if missing;
 #   2. disables the viewer's usage analytics (rerun analytics disable);
-#   3. writes an .rrd of a bundled recording with `hop-impedance view --save`;
+#   3. writes an .rrd of a bundled recording with `hop-impedance view --rrd`;
 #   4. opens it in the headless viewer (loopback only), pauses at TIME_S, saves the PNG.
 # Usage: scripts/screenshot.sh [RECORDING] [OUT.png]   (env: TIME_S, PY)
 set -euo pipefail
@@ -21,6 +21,6 @@ fi
 "$PY" -m rerun_cli analytics disable >/dev/null
 RRD=$(mktemp --suffix=.rrd)
 trap 'rm -f "$RRD"' EXIT
-"$PY" -m hop_impedance.cli view "$REC" --save "$RRD"
+"$PY" -m hop_impedance.cli view "$REC" --rrd "$RRD"
 "$PY" -m hop_impedance.viz.screenshot "$RRD" "$OUT" --time-s "$TIME_S" 2>/dev/null
 echo "screenshot: $OUT"

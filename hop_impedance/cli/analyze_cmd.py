@@ -10,6 +10,9 @@ from __future__ import annotations
 
 import argparse
 
+from hop_impedance.cli.conventions import OptionDefault
+
+OPTIONS = "hop_impedance.biomech.analysis:AnalysisOptions"
 
 def register(subparsers) -> None:
     """Add the ``analyze`` parser."""
@@ -25,8 +28,10 @@ def register(subparsers) -> None:
     p.add_argument("--height-m", type=float, help="body height (m), overrides/replaces the /subject message")
     p.add_argument("--sex", choices=("female", "male"), help="de Leva table (default: the recording's, else female)")
     p.add_argument("--segments", metavar="YAML", help="per-segment overrides of the body model")
-    p.add_argument("--cutoff-hz", type=float, default=12.0, help="low-pass cut-off for markers and forces (Hz, default 12)")
-    p.add_argument("--max-gap-s", type=float, default=0.05, help="longest marker gap filled (s, default 0.05)")
+    p.add_argument("--cutoff-hz", type=float, default=OptionDefault(OPTIONS, "marker_cutoff_hz"),
+                   help="low-pass cut-off for markers and forces (Hz, default %(default)s)")
+    p.add_argument("--max-gap-s", type=float, default=OptionDefault(OPTIONS, "max_gap_s"),
+                   help="longest marker gap filled (s, default %(default)s)")
     p.add_argument("--detector", action="append", metavar="NAME=VALUE",
                    help="stance detection setting (repeatable), e.g. takeoff_n=15; names and defaults: "
                         "DetectorOptions in biomech/stance_detection.py, the same as the nodes' parameters")

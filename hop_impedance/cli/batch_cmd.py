@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import argparse
 
+from hop_impedance.cli.conventions import OptionDefault
+
+OPTIONS = "hop_impedance.batch.task:BatchOptions"
 
 def register(subparsers) -> None:
     """Add the ``batch`` parser."""
@@ -34,8 +37,10 @@ def register(subparsers) -> None:
                         "subject, recording, or another manifest column (default: condition if the manifest "
                         "gives one, else frequency)")
     p.add_argument("--force", action="store_true", help="redo every recording, even those up to date")
-    p.add_argument("--cutoff-hz", type=float, default=12.0, help="as analyze: low-pass cut-off (Hz, default 12)")
-    p.add_argument("--max-gap-s", type=float, default=0.05, help="as analyze: longest marker gap filled (s)")
+    p.add_argument("--cutoff-hz", type=float, default=OptionDefault(OPTIONS, "cutoff_hz"),
+                   help="as analyze: low-pass cut-off (Hz, default %(default)s)")
+    p.add_argument("--max-gap-s", type=float, default=OptionDefault(OPTIONS, "max_gap_s"),
+                   help="as analyze: longest marker gap filled (s, default %(default)s)")
     p.add_argument("--segments", metavar="YAML", help="as analyze: per-segment overrides of the body model")
     p.add_argument("--indent", type=int, default=None, help="as analyze: pretty-print the JSON with this indent")
     p.add_argument("--detector", action="append", metavar="NAME=VALUE",

@@ -5,23 +5,31 @@ process (EventsExecutor; ``--processes`` for one process per node) as fast as
 the nodes take it without loss, prints the per-stance table (touchdown,
 contact time, ankle/knee/hip k0, k1 and R^2, status) and writes
 ``OUT/pipeline.mcap`` with the inputs and every output topic, then writes the
-Rerun view of the recording to ``demo.rrd`` (``--rrd``; repository root under
-``make demo``, removed by ``make clean``) with
+Rerun view of the recording to ``demo.rrd`` (``--rrd``; the current directory,
+the repository root under ``make demo``, removed by ``make clean``) with
 :func:`hop_impedance.viz.session.write_rrd` and says how to open it.
 
 Choice: ``write_rrd`` re-runs the offline analysis and fits (~2 s) instead of
 converting the pipeline's messages: the offline view is the reference view
 (same entities and blueprint as ``hop-impedance view``), and the end-to-end
 test shows the pipeline's coefficients equal the offline ones within
-2e-3 relative. ``hop-impedance pipeline --rerun-save`` writes the live
+2e-3 relative. ``hop-impedance pipeline --rrd`` writes the live
 pipeline's own view instead.
+
+The bundled recording is found next to the package (``recordings/`` of the
+repository), so ``hop-impedance demo`` works from any directory; outputs go
+to the current directory.
 """
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from hop_impedance.cli.pipeline_cmd import add_pipeline_arguments, config_from_args, print_report
+
+#: The recording ``demo`` replays when none is given: in the repository, not the current directory.
+BUNDLED_RECORDING = Path(__file__).resolve().parents[2] / "recordings" / "sim_2p20hz_hard.mcap"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,22 +39,28 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="The main job of `make demo`: replay a recording through the node graph, print one line per "
         "stance and write the output MCAP.",
     )
-    add_pipeline_arguments(p, default_recording="recordings/sim_2p20hz_hard.mcap")
-    p.add_argument("--rrd", default="demo.rrd", help="write the Rerun view here ('' = none) [demo.rrd]")
+    add_pipeline_arguments(p, recording_help=f"MCAP recording to replay [the bundled {BUNDLED_RECORDING.name}]")
+    p.add_argument("--rrd", default="demo.rrd", metavar="OUT.rrd", help="write the Rerun view here ('' = none) [demo.rrd]")
     p.set_defaults(func=run, out="demo_out", timeout=60.0)
 
 
 def run(args: argparse.Namespace) -> int:
     from hop_impedance.nodes.runner import run_pipeline
 
-    print(f"replaying {args.recording} through replay -> stance_detector, inverse_dynamics -> "
+    if args.recording is None and args.recording_flag is None:
+        if not BUNDLED_RECORDING.is_file():
+            raise FileNotFoundError(f"no bundled recording at {BUNDLED_RECORDING} (it comes with the repository, "
+                                    "not an installed package); give one: hop-impedance demo REC.mcap")
+        args.recording = str(BUNDLED_RECORDING)
+    config = config_from_args(args)
+    print(f"replaying {config.recording} through replay -> stance_detector, inverse_dynamics -> "
           f"impedance_estimator -> recorder ({'separate processes' if args.processes else 'one process'})")
-    report = run_pipeline(config_from_args(args))
-    code = print_report(report, args.recording, args.tolerate_loss)
+    report = run_pipeline(config)
+    code = print_report(report, config.recording, args.tolerate_loss)
     if args.rrd:
         from hop_impedance.viz.session import write_rrd
 
-        summary = write_rrd(args.recording, None, None, args.rrd)
+        summary = write_rrd(config.recording, None, None, args.rrd)
         print(f"Rerun view ({summary.stances} stances, {summary.fitted_stances} fitted): {args.rrd}; "
               f"open it with: .venv/bin/rerun {args.rrd}")
     return code

@@ -1,10 +1,12 @@
-"""``hop-impedance discover REC.mcap --json OUT.json [--report DIR] [--rerun OUT.rrd]``.
+"""``hop-impedance discover REC.mcap --json OUT.json [--report DIR] [--rrd OUT.rrd]``.
 
 Names the effect(s) the baseline spring-leg model misses in a recording
 (issue 8). The JSON schema is documented in docs/discovery.md.
 """
 
 from __future__ import annotations
+
+from hop_impedance.cli.conventions import OptionDefault, add_rrd_argument
 
 
 def register(subparsers) -> None:
@@ -19,8 +21,9 @@ def register(subparsers) -> None:
     p.add_argument("recording", help="contract recording (MCAP)")
     p.add_argument("--json", required=True, metavar="OUT", help="output JSON file ('-' for stdout)")
     p.add_argument("--report", metavar="DIR", help="write PNG figures (gap per step, residuals) into DIR")
-    p.add_argument("--rerun", metavar="OUT.rrd", help="write a Rerun recording of the measured and simulated stances")
-    p.add_argument("--max-steps", type=int, default=4, help="most effects added (default 4)")
+    add_rrd_argument(p, "write a Rerun recording of the measured and simulated stances", old=("--rerun",))
+    p.add_argument("--max-steps", type=int, default=OptionDefault("hop_impedance.discovery.workflow:discover", "max_steps"),
+                   help="most effects added (default %(default)s)")
     p.add_argument("--indent", type=int, default=2, help="JSON indent (default 2)")
     p.set_defaults(func=run)
 
@@ -44,10 +47,10 @@ def run(args) -> int:
         from hop_impedance.discovery.report import write_figures
 
         write_figures(doc, args.report)
-    if args.rerun:
+    if args.rrd:
         from hop_impedance.discovery.rerun_report import write_rrd
 
-        write_rrd(rec, doc, args.rerun)
+        write_rrd(rec, doc, args.rrd)
     found = ", ".join(doc["effects_found"]) or "none"
     print(f"effects found: {found}", file=sys.stderr)
     return 0

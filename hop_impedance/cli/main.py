@@ -2,7 +2,7 @@
 
 Each sub-command lives in its own module ``hop_impedance/cli/<name>_cmd.py``
 exposing ``register(subparsers)``, which adds its parser and sets
-``func=run``. Heavy imports (rclpy, scipy, rerun) happen inside ``run`` so that
+``func=run``, following the conventions in :mod:`hop_impedance.cli.conventions`. Heavy imports (rclpy, scipy, rerun) happen inside ``run`` so that
 ``--help`` stays fast and side-effect free.
 """
 
@@ -12,6 +12,8 @@ import argparse
 import importlib
 import os
 import sys
+
+from hop_impedance.cli.conventions import Parser
 
 # Order shown in --help.
 COMMAND_MODULES: tuple[str, ...] = (
@@ -35,8 +37,8 @@ Typical use:
   hop-impedance analyze REC.mcap --json OUT   stances, inverse dynamics and impedance fits
   hop-impedance batch DIR --out OUT           many recordings on Dask, population tables
   hop-impedance simulate --freq 2.2 --out REC.mcap
-  hop-impedance pipeline --recording REC.mcap the ROS 2 node graph on a replayed recording
-  hop-impedance view REC.mcap --save OUT.rrd  Rerun views of a session
+  hop-impedance pipeline REC.mcap             the ROS 2 node graph on a replayed recording
+  hop-impedance view REC.mcap --rrd OUT.rrd   Rerun views of a session
   hop-impedance discover REC.mcap --json OUT  name the effect a simulation misses
   hop-impedance import SESSION.c3d --out REC.mcap
 """
@@ -44,7 +46,7 @@ Typical use:
 
 def build_parser() -> argparse.ArgumentParser:
     """Parser with every sub-command whose module is present."""
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="hop-impedance",
         description=DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,

@@ -1,4 +1,4 @@
-"""``hop-impedance pipeline --recording REC.mcap``: the ROS 2 node graph on a replayed recording.
+"""``hop-impedance pipeline REC.mcap``: the ROS 2 node graph on a replayed recording.
 
 Starts replay, stance_detector, inverse_dynamics, impedance_estimator and
 recorder in one process (EventsExecutor) or, with ``--processes``, as
@@ -10,17 +10,29 @@ from __future__ import annotations
 
 import argparse
 
+from hop_impedance.cli.conventions import DeprecatedAlias, OptionDefault, add_rrd_argument, positional_or_alias
 
-def add_pipeline_arguments(p: argparse.ArgumentParser, default_recording: str | None = None) -> None:
-    """Options shared by ``pipeline`` and ``demo``."""
-    p.add_argument("--recording", required=default_recording is None, default=default_recording, help="MCAP recording to replay")
-    p.add_argument("--out", default="pipeline_out", help="folder for pipeline.mcap and logs [pipeline_out]")
-    p.add_argument("--rate", type=float, default=0.0, help="replay speed factor; 0 = as fast as the nodes take it without loss [0]")
+
+CONFIG = "hop_impedance.nodes.runner:PipelineConfig"
+
+
+def add_pipeline_arguments(p: argparse.ArgumentParser, recording_help: str = "MCAP recording to replay") -> None:
+    """Arguments shared by ``pipeline`` and ``demo``: the recording (positional) and the run's options.
+
+    ``--recording`` is the former flag for the recording, kept as a deprecated alias
+    (read it with :func:`recording_from_args`).
+    """
+    p.add_argument("recording", nargs="?", help=recording_help)
+    p.add_argument("--recording", dest="recording_flag", action=DeprecatedAlias, new="a positional REC.mcap")
+    p.add_argument("--out", default=OptionDefault(CONFIG, "out_dir"), help="folder for pipeline.mcap and logs [%(default)s]")
+    p.add_argument("--rate", type=float, default=OptionDefault(CONFIG, "rate"),
+                   help="replay speed factor; 0 = as fast as the nodes take it without loss [%(default)s]")
     p.add_argument("--processes", action="store_true", help="one OS process per node instead of one process")
     p.add_argument("--low-latency", action="store_true", help="analyse each stance at take-off + 50 ms (docs/pipeline.md)")
     p.add_argument("--no-frames", action="store_true", help="do not publish per-frame /joint_kinetics")
     p.add_argument("--params-file", help="ROS 2 YAML parameter file (e.g. config/pipeline.yaml)")
-    p.add_argument("--timeout", type=float, default=120.0, help="give up after this many seconds [120]")
+    p.add_argument("--timeout", type=float, default=OptionDefault(CONFIG, "timeout_s"),
+                   help="give up after this many seconds [%(default)s]")
     p.add_argument("--json", metavar="OUT", help="also write every stance's row, the losses and the exit status as JSON "
                                                 "('-' for stdout; docs/pipeline.md)")
     p.add_argument("--tolerate-loss", action="store_true",
@@ -36,19 +48,27 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_pipeline_arguments(p)
     p.add_argument("--loop", action="store_true", help="replay in a loop (until --timeout)")
-    p.add_argument("--rerun", action="store_true", help="add the Rerun bridge node (spawns a viewer unless --rerun-save/--rerun-url)")
-    p.add_argument("--rerun-save", metavar="OUT.rrd", help="the Rerun bridge writes this .rrd (implies --rerun; works headless)")
+    p.add_argument("--rerun", action="store_true", help="add the Rerun bridge node (spawns a viewer unless --rrd/--rerun-url)")
+    add_rrd_argument(p, "the Rerun bridge writes this .rrd (implies --rerun; works headless)", old=("--rerun-save",))
     p.add_argument("--rerun-url", metavar="URL", help="the Rerun bridge streams to this viewer, e.g. rerun+http://127.0.0.1:9876/proxy")
     p.set_defaults(func=run)
+
+
+def recording_from_args(args: argparse.Namespace) -> str:
+    """The recording to replay: the positional, or the deprecated ``--recording``; one of them is needed."""
+    recording = positional_or_alias(args, "recording", "recording_flag", "--recording")
+    if recording is None:
+        raise ValueError("no recording given: hop-impedance pipeline REC.mcap")
+    return recording
 
 
 def config_from_args(args: argparse.Namespace):
     from hop_impedance.nodes.runner import PipelineConfig
 
     return PipelineConfig(
-        recording=args.recording, out_dir=args.out, rate=args.rate, processes=args.processes,
+        recording=recording_from_args(args), out_dir=args.out, rate=args.rate, processes=args.processes,
         low_latency=args.low_latency, publish_frames=not args.no_frames, rerun=getattr(args, "rerun", False),
-        rerun_save=getattr(args, "rerun_save", None), rerun_url=getattr(args, "rerun_url", None),
+        rerun_save=getattr(args, "rrd", None), rerun_url=getattr(args, "rerun_url", None),
         timeout_s=args.timeout, params_file=args.params_file, loop=getattr(args, "loop", False),
     )
 
@@ -174,10 +194,11 @@ def run(args: argparse.Namespace) -> int:
     from hop_impedance.cli.json_output import json_output
     from hop_impedance.nodes.runner import run_pipeline
 
-    report = run_pipeline(config_from_args(args))
+    config = config_from_args(args)
+    report = run_pipeline(config)
     if not args.json:
-        return print_report(report, args.recording, args.tolerate_loss)
+        return print_report(report, config.recording, args.tolerate_loss)
     with json_output(args.json) as write_json:
-        code = print_report(report, args.recording, args.tolerate_loss)
-        write_json(json.dumps(pipeline_document(report, args.recording, code), indent=1, allow_nan=False))
+        code = print_report(report, config.recording, args.tolerate_loss)
+        write_json(json.dumps(pipeline_document(report, config.recording, code), indent=1, allow_nan=False))
     return code

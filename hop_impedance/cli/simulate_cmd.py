@@ -5,7 +5,13 @@ from __future__ import annotations
 import argparse
 import sys
 
+from hop_impedance.cli.conventions import DeprecatedAlias, OptionDefault
+
 SURFACES = ("hard", "soft", "rigid")
+SIMULATE = "hop_impedance.simulation.simulate:simulate_recording"
+SUBJECT = "hop_impedance.simulation.scenarios:SEED_SUBJECT"
+EFFECTS = "hop_impedance.simulation.scenarios:Effects"
+SENSORS = "hop_impedance.simulation.sensors:SensorConfig"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -17,10 +23,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "OUT's stem + .truth.json with every parameter, per-stance events, true joint moments and "
         "impedance coefficients. Every law and sensor effect can be switched on or off.",
     )
-    p.add_argument("--freq", type=float, default=2.2, help="target hop frequency, Hz (default 2.2)")
-    p.add_argument("--surface", choices=SURFACES, default="hard", help="surface under the hops (default hard)")
-    p.add_argument("--hops", type=int, default=10, help="number of hops (default 10)")
-    p.add_argument("--seed", type=int, default=1, help="seed of variability and noise (default 1)")
+    p.add_argument("--freq", type=float, default=OptionDefault(SIMULATE, "freq_hz"),
+                   help="target hop frequency, Hz (default %(default)s)")
+    p.add_argument("--surface", choices=SURFACES, default=OptionDefault(SIMULATE, "surface_name"),
+                   help="surface under the hops (default %(default)s)")
+    p.add_argument("--hops", type=int, default=OptionDefault(SIMULATE, "n_hops"), help="number of hops (default %(default)s)")
+    p.add_argument("--seed", type=int, default=OptionDefault(SIMULATE, "seed"),
+                   help="seed of variability and noise (default %(default)s)")
     p.add_argument("--out", required=True, help="output recording, .mcap")
     p.add_argument("--tuned-for", choices=SURFACES, default=None,
                    help="surface the law is tuned (calibrated) for; default --surface. "
@@ -28,34 +37,46 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--unexpected", choices=SURFACES, default=None,
                    help="surface swapped in, without re-tuning, on the hops of --unexpected-hops")
     p.add_argument("--unexpected-hops", default="", help="comma-separated 0-based hop indices, e.g. 5,6")
-    p.add_argument("--mass", type=float, default=54.8, help="body mass, kg (default: seed mean 54.8)")
-    p.add_argument("--height", type=float, default=1.63, help="body height, m (default: seed mean 1.63)")
+    p.add_argument("--mass-kg", type=float, default=OptionDefault(SUBJECT, "body_mass_kg"),
+                   help="body mass, kg (default: seed mean %(default)s)")
+    p.add_argument("--height-m", type=float, default=OptionDefault(SUBJECT, "body_height_m"),
+                   help="body height, m (default: seed mean %(default)s)")
+    p.add_argument("--mass", type=float, dest="mass_kg", action=DeprecatedAlias, new="--mass-kg")
+    p.add_argument("--height", type=float, dest="height_m", action=DeprecatedAlias, new="--height-m")
     p.add_argument("--no-variability", action="store_true", help="identical hops (no hop-to-hop variability)")
     law = p.add_argument_group("impedance law effects (each on/off)")
     law.add_argument("--law", choices=("seed", "constant"), default="seed",
                      help="seed: k0 + k1 (rho - rho0) (Eq. 10); constant: k0 only")
-    for flag, default, text in (
-        ("quadratic-stiffness", False, "k2 term of Eq. 3"),
-        ("rate-stiffness", False, "k3 term of Eq. 3 (rate-dependent stiffness)"),
-        ("damping", True, "b0 damping (0.5 N m s/rad)"),
-        ("nonlinear-damping", False, "b1 term of Eq. 3"),
-        ("activation", False, "time-based activation scaling the stiffness (seed 001)"),
-        ("push-off", True, "active extensor push-off late in stance"),
-    ):
-        law.add_argument(f"--{flag}", action=argparse.BooleanOptionalAction, default=default,
-                         help=f"{text} (default {'on' if default else 'off'})")
+    for flag, field, text in EFFECT_FLAGS:
+        law.add_argument(f"--{flag}", dest=field, action=argparse.BooleanOptionalAction,
+                         default=OptionDefault(EFFECTS, field), help=f"{text} (default: %(default)s)")
     sens = p.add_argument_group("sensors")
     sens.add_argument("--noise", choices=("realistic", "none"), default="realistic",
-                      help="realistic: 2 N force, 0.5 N m torque, 1 mm markers; none: noise-free")
-    sens.add_argument("--force-rate", type=float, default=1000.0, help="force-plate rate, Hz (default 1000)")
-    sens.add_argument("--marker-rate", type=float, default=100.0, help="marker rate, Hz (default 100)")
+                      help="realistic: SensorConfig's noise (2 N force, 0.5 N m torque, 1 mm markers); none: noise-free")
+    sens.add_argument("--force-rate", type=float, default=OptionDefault(SENSORS, "force_rate_hz"),
+                      help="force-plate rate, Hz (default %(default)s)")
+    sens.add_argument("--marker-rate", type=float, default=OptionDefault(SENSORS, "marker_rate_hz"),
+                      help="marker rate, Hz (default %(default)s)")
     sens.add_argument("--force-noise", type=float, default=None, help="force noise SD, N (overrides --noise)")
     sens.add_argument("--marker-noise", type=float, default=None, help="marker noise SD, m (overrides --noise)")
-    sens.add_argument("--force-offset", type=float, default=0.0, help="constant Fz offset, N (default 0)")
-    sens.add_argument("--marker-delay", type=float, default=0.0,
-                      help="marker stream time offset, s: a marker stamped t shows the body at t - delay")
-    sens.add_argument("--occlusions", type=float, default=0.0, help="occlusions per second (default 0)")
+    sens.add_argument("--force-offset", type=float, default=OptionDefault(SENSORS, "force_offset_n"),
+                      help="constant Fz offset, N (default %(default)s)")
+    sens.add_argument("--marker-delay", type=float, default=OptionDefault(SENSORS, "marker_time_offset_s"),
+                      help="marker stream time offset, s: a marker stamped t shows the body at t - delay (default %(default)s)")
+    sens.add_argument("--occlusions", type=float, default=OptionDefault(SENSORS, "occlusions_per_s"),
+                      help="occlusions per second (default %(default)s)")
     p.set_defaults(func=run)
+
+
+#: (flag, Effects field, help) of each switchable law effect; the default is the field's.
+EFFECT_FLAGS = (
+    ("quadratic-stiffness", "quadratic_stiffness", "k2 term of Eq. 3"),
+    ("rate-stiffness", "rate_dependent_stiffness", "k3 term of Eq. 3 (rate-dependent stiffness)"),
+    ("damping", "damping", "b0 damping (0.5 N m s/rad)"),
+    ("nonlinear-damping", "nonlinear_damping", "b1 term of Eq. 3"),
+    ("activation", "time_activation", "time-based activation scaling the stiffness (seed 001)"),
+    ("push-off", "push_off", "active extensor push-off late in stance"),
+)
 
 
 def _hops(text: str) -> tuple[int, ...]:
@@ -73,27 +94,21 @@ def run(args: argparse.Namespace) -> int:
 
     if args.hops < 1:
         raise ValueError(f"--hops must be at least 1, got {args.hops}")
-    effects = Effects(
-        angle_dependent_stiffness=args.law == "seed",
-        quadratic_stiffness=args.quadratic_stiffness,
-        rate_dependent_stiffness=args.rate_stiffness,
-        damping=args.damping,
-        nonlinear_damping=args.nonlinear_damping,
-        time_activation=args.activation,
-        push_off=args.push_off,
-    )
-    realistic = args.noise == "realistic"
+    effects = Effects(angle_dependent_stiffness=args.law == "seed",
+                      **{field: getattr(args, field) for _, field, _ in EFFECT_FLAGS})
+    realistic = SensorConfig()  # its noise levels are the realistic ones
+    noisy = args.noise == "realistic"
     sensors = SensorConfig(
         force_rate_hz=args.force_rate,
         marker_rate_hz=args.marker_rate,
-        force_noise_n=args.force_noise if args.force_noise is not None else (2.0 if realistic else 0.0),
-        torque_noise_nm=0.5 if realistic else 0.0,
+        force_noise_n=args.force_noise if args.force_noise is not None else (realistic.force_noise_n if noisy else 0.0),
+        torque_noise_nm=realistic.torque_noise_nm if noisy else 0.0,
         force_offset_n=args.force_offset,
-        marker_noise_m=args.marker_noise if args.marker_noise is not None else (0.001 if realistic else 0.0),
+        marker_noise_m=args.marker_noise if args.marker_noise is not None else (realistic.marker_noise_m if noisy else 0.0),
         occlusions_per_s=args.occlusions,
         marker_time_offset_s=args.marker_delay,
     )
-    subject = Subject("sim", args.mass, args.height, "female")
+    subject = Subject("sim", args.mass_kg, args.height_m, "female")
     rec, truth = simulate_recording(
         args.freq, args.surface, args.hops, args.seed, effects, sensors, subject=subject,
         tuned_for=args.tuned_for, unexpected_surface=args.unexpected, unexpected_hops=_hops(args.unexpected_hops),

@@ -104,7 +104,7 @@ def test_empty_and_text_files(tmp_path, capsys, content):
     path = tmp_path / "x.mcap"
     path.write_bytes(content)
     for argv in (["analyze", path, "--json", tmp_path / "o.json"], ["info", path],
-                 ["pipeline", "--recording", path, "--out", tmp_path / "p"], ["replay", path, "--wait", "0"]):
+                 ["pipeline", path, "--out", tmp_path / "p"], ["replay", path, "--wait", "0"]):
         code = main([str(a) for a in argv])
         err = capsys.readouterr().err
         assert code == 2 and "Traceback" not in err

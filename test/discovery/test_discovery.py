@@ -112,7 +112,7 @@ def test_cli_writes_schema_json_and_figures(tmp_path):
     save_recording(path, recording("offset"))
     out = tmp_path / "out.json"
     assert cli_main(["discover", str(path), "--json", str(out), "--report", str(tmp_path / "rep"),
-                     "--rerun", str(tmp_path / "d.rrd")]) == 0
+                     "--rrd", str(tmp_path / "d.rrd")]) == 0
     doc = json.loads(out.read_text())
     assert doc["effects_found"] == ["force_plate_offset"]
     step = doc["steps"][0]

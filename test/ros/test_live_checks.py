@@ -132,7 +132,7 @@ def test_killed_node_is_named_and_the_recorder_file_stays_readable(tmp_path):
     """kill -9 of the recorder under --processes: one line naming it, finished stances printed, exit 1."""
     out = tmp_path / "out"
     env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
-    proc = subprocess.Popen([sys.executable, "-m", "hop_impedance.cli", "pipeline", "--recording", str(bad.BUNDLED),
+    proc = subprocess.Popen([sys.executable, "-m", "hop_impedance.cli", "pipeline", str(bad.BUNDLED),
                              "--out", str(out), "--processes", "--rate", "1", "--timeout", "90"],
                             cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     victim = None
@@ -210,7 +210,7 @@ def test_seeded_loss_under_processes_every_stance_has_a_row_in_table_json_and_mc
     params = tmp_path / "loss.yaml"
     params.write_text("replay:\n  ros__parameters:\n    drop_fraction: 0.01\n    drop_seed: 11\n")
     out, doc_path = tmp_path / "out", tmp_path / "run.json"
-    code = main(["pipeline", "--recording", str(bad.BUNDLED), "--processes", "--params-file", str(params),
+    code = main(["pipeline", str(bad.BUNDLED), "--processes", "--params-file", str(params),
                  "--out", str(out), "--json", str(doc_path), "--timeout", "90"])
     captured = capfd.readouterr()
     assert doc_path.exists(), captured.err[-2000:]

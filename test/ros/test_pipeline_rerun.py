@@ -1,5 +1,6 @@
-"""``--rerun-save``: the Rerun bridge runs inside the pipeline on this headless machine and writes an .rrd
-that holds one stance log per stance the pipeline summarised, with the pipeline's own coefficients."""
+"""``pipeline --rrd`` (formerly ``--rerun-save``): the Rerun bridge runs inside the pipeline on this headless
+machine and writes an .rrd that holds one stance log per stance the pipeline summarised, with the pipeline's own
+coefficients."""
 
 import json
 import os

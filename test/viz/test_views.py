@@ -128,7 +128,7 @@ def test_view_command_writes_rrd_and_reports(tmp_path, capsys):
     from hop_impedance.cli.main import main
 
     out = tmp_path / "sub" / "v.rrd"
-    assert main(["view", str(RECORDING), "--save", str(out)]) == 0
+    assert main(["view", str(RECORDING), "--rrd", str(out)]) == 0
     assert "10 stances, 10 fitted" in capsys.readouterr().out
     _, tables = column(load_store(out), S.TIMELINE, "/" + S.TABLE, "TextDocument:text")
     assert len(tables) == 10
@@ -137,7 +137,7 @@ def test_view_command_writes_rrd_and_reports(tmp_path, capsys):
 def test_view_command_errors_are_one_line(tmp_path, capsys, monkeypatch):
     from hop_impedance.cli.main import main
 
-    assert main(["view", str(tmp_path / "missing.mcap"), "--save", str(tmp_path / "x.rrd")]) == 2
+    assert main(["view", str(tmp_path / "missing.mcap"), "--rrd", str(tmp_path / "x.rrd")]) == 2
     assert "no such recording" in capsys.readouterr().err
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
