@@ -1,6 +1,8 @@
 """Python packaging for hop_impedance (also used by colcon's ament_python build)."""
 
+import xml.etree.ElementTree as ET
 from glob import glob
+from pathlib import Path
 
 from setuptools import find_packages, setup
 
@@ -8,7 +10,8 @@ PACKAGE = "hop_impedance"
 
 setup(
     name=PACKAGE,
-    version="0.1.0",
+    # written once, in package.xml (ROS requires it there); hop_impedance.__version__ reads it too
+    version=ET.parse(Path(__file__).resolve().parent / "package.xml").findtext("version"),
     packages=find_packages(include=[PACKAGE, f"{PACKAGE}.*"]),
     package_data={PACKAGE: ["py.typed", "data/*.yaml", "data/marker_maps/*.yaml"]},
     data_files=[

@@ -16,4 +16,28 @@ Layout (pure numerical core first, ROS adapters last):
 Only ``hop_impedance.nodes`` (and the CLI commands that start nodes) import rclpy.
 """
 
-__version__ = "0.1.0"
+
+def _version() -> str:
+    """The version, written once: ``<version>`` of package.xml (ROS requires it there).
+
+    Run from the repository (editable install, source tree), read that file; installed elsewhere
+    (wheel, colcon install space), read the metadata setup.py made from the same file.
+    """
+    from pathlib import Path
+
+    package_xml = Path(__file__).resolve().parents[1] / "package.xml"
+    if package_xml.is_file():
+        import xml.etree.ElementTree as ET
+
+        root = ET.parse(package_xml).getroot()
+        if root.findtext("name") == "hop_impedance" and root.findtext("version"):
+            return root.findtext("version", "").strip()
+    from importlib.metadata import PackageNotFoundError, version as installed_version
+
+    try:
+        return installed_version("hop_impedance")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+__version__ = _version()

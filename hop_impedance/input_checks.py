@@ -113,7 +113,8 @@ def marker_columns(names: list[str], marker_map: dict[str, str] | None = None) -
         return None, CheckFailure(
             "marker_names",
             f"{MARKER_TOPIC}: missing marker(s) {', '.join(missing)}; the recording has {list(names)} "
-            "(names are case-sensitive; give a mapping, --marker-map, if they differ)",
+            "(names are case-sensitive; if they differ, import the session with a marker mapping: "
+            "hop-impedance import --markers NAME or YAML)",
         )
     return [names.index(wanted[c]) for c in MARKER_NAMES], None
 

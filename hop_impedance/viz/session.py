@@ -1,6 +1,6 @@
 """Offline view of a whole recording: analysis + fits -> the same Rerun entities as live.
 
-Used by ``hop-impedance view REC.mcap [--save OUT.rrd]`` and by ``make demo``
+Used by ``hop-impedance view REC.mcap [--rrd OUT.rrd]`` and by ``make demo``
 (:func:`write_rrd`).
 """
 
