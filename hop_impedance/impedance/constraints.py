@@ -28,6 +28,30 @@ CONSTRAINT_FAMILIES: tuple[str, ...] = (
 )
 
 
+def stiffness_nonnegative_rows(regressors: StanceRegressors, columns: np.ndarray) -> np.ndarray:
+    """Eq. 7, ``K_l >= 0`` at every sample: rows (N, p) of K (N m/rad) for the parameters ``columns``."""
+    return regressors.stiffness_rows[:, columns]
+
+
+def damping_nonnegative_rows(regressors: StanceRegressors, columns: np.ndarray) -> np.ndarray:
+    """Eq. 7, ``B_l >= 0`` at every sample: rows (N, p) of B (N m s/rad) for the parameters ``columns``."""
+    return regressors.damping_rows[:, columns]
+
+
+def spring_energy_nonnegative_rows(regressors: StanceRegressors, columns: np.ndarray) -> np.ndarray:
+    """Eq. 8, ``E_s,l = int_t0^tl M_s d(rho) >= 0`` (E_s0 = 0 at touchdown): rows (N, p) in J.
+
+    (:func:`~hop_impedance.impedance.regression_model.spring_energy_polynomial_regressors`
+    and its k3 column, integrated only when k3 is among ``columns``.)
+    """
+    return regressors.spring_energy_columns(columns)
+
+
+def damper_power_nonpositive_rows(regressors: StanceRegressors, columns: np.ndarray) -> np.ndarray:
+    """Eq. 9, ``P_d,l = -M_d,l omega_l <= 0`` written as ``M_d,l omega_l >= 0``: rows (N, p) in W."""
+    return regressors.damper_power_columns(columns)
+
+
 def constraint_rows(regressors: StanceRegressors, columns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Stacked Eqs. 7-9 rows for the parameters ``columns`` (``A @ theta >= 0``).
 
@@ -42,16 +66,17 @@ def constraint_rows(regressors: StanceRegressors, columns: np.ndarray) -> tuple[
     Returns
     -------
     rows : ndarray, shape (m, p)
-        One row per non-trivial constraint (units: N m/rad, N m s/rad, J, W).
+        One row per non-trivial constraint (units: N m/rad, N m s/rad, J, W),
+        in :data:`CONSTRAINT_FAMILIES` order.
     family : ndarray of int, shape (m,)
         Index into :data:`CONSTRAINT_FAMILIES` of each row.
     """
     blocks = np.concatenate(
         (
-            regressors.stiffness_rows[:, columns],
-            regressors.damping_rows[:, columns],
-            regressors.spring_energy_columns(columns),
-            regressors.damper_power_columns(columns),
+            stiffness_nonnegative_rows(regressors, columns),
+            damping_nonnegative_rows(regressors, columns),
+            spring_energy_nonnegative_rows(regressors, columns),
+            damper_power_nonpositive_rows(regressors, columns),
         )
     )
     keep = (blocks != 0.0).any(axis=1)

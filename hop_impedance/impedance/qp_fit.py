@@ -42,7 +42,7 @@ every row, so the problem is never primal infeasible.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import osqp
@@ -165,6 +165,85 @@ def _shows_active_row(rows: np.ndarray, x: np.ndarray, y: np.ndarray) -> bool:
     return bool((rows @ np.asarray(x, float) < -np.asarray(y, float)).any())
 
 
+def least_squares_objective(design: np.ndarray, target: np.ndarray, theta: np.ndarray) -> float:
+    """Eq. 6, ``J = sum_l (tau_l - X_l theta)**2`` (N^2 m^2): the sum of squared moment errors.
+
+    Parameters
+    ----------
+    design : ndarray, shape (N, p)
+        Regressor rows X of the model's parameters (N m per coefficient unit).
+    target : ndarray, shape (N,)
+        Measured moment tau (N m).
+    theta : ndarray, shape (p,)
+        Parameters (NaN in any gives NaN).
+    """
+    if not np.isfinite(theta).all():
+        return float("nan")
+    residual = target - design @ theta
+    return float(residual @ residual)
+
+
+@dataclass(frozen=True)
+class ScaledProblem:
+    """Eq. 6 under Eqs. 7-9 as OSQP solves it: ``min 1/2 x^T P x + q^T x`` s.t. ``A x >= 0``.
+
+    With ``theta = x * target_norm / column_norms`` this is Eq. 6 divided by
+    ``|tau|^2 / 2`` (unit-norm columns and target), and A's rows are the
+    constraint rows in x, each scaled to unit norm.
+
+    Attributes
+    ----------
+    design : ndarray, shape (N, p)
+        X in the caller's units.
+    target : ndarray, shape (N,)
+        tau (N m).
+    scaled_design, scaled_target : ndarray, shapes (N, p) and (N,)
+        ``X / column_norms`` and ``tau / target_norm``.
+    P, q : ndarray, shapes (p, p) and (p,)
+        ``Xs^T Xs`` and ``-Xs^T ys``.
+    A : ndarray, shape (m, p)
+        Unit-norm constraint rows in x.
+    column_norms : ndarray, shape (p,)
+    target_norm : float
+    """
+
+    design: np.ndarray
+    target: np.ndarray
+    scaled_design: np.ndarray
+    scaled_target: np.ndarray
+    P: np.ndarray
+    q: np.ndarray
+    A: np.ndarray
+    column_norms: np.ndarray
+    target_norm: float
+
+    def unscaled(self, x: np.ndarray) -> np.ndarray:
+        """theta (caller's units) of a scaled solution x."""
+        return x * self.target_norm / self.column_norms
+
+
+def scaled_problem(design: np.ndarray, target: np.ndarray, constraints: np.ndarray) -> ScaledProblem:
+    """Eq. 6 (objective) and Eqs. 7-9 (``constraints @ theta >= 0``) scaled for OSQP (module docstring, "Scaling").
+
+    Raises
+    ------
+    ValueError
+        When a regressor column or the moment is zero (nothing to scale by).
+    """
+    X = np.asarray(design, float)
+    y = np.asarray(target, float)
+    col_norm = np.sqrt(np.einsum("ij,ij->j", X, X))
+    y_norm = float(np.sqrt(y @ y))
+    if (col_norm == 0.0).any() or y_norm == 0.0:
+        raise ValueError("constrained fit needs non-zero regressor columns and a non-zero moment")
+    Xs = X / col_norm
+    ys = y / y_norm
+    A = np.asarray(constraints, float).reshape(-1, X.shape[1]) / col_norm
+    row_norm = np.sqrt(np.einsum("ij,ij->i", A, A))
+    A = A / np.where(row_norm > 0.0, row_norm, 1.0)[:, None]
+    return ScaledProblem(X, y, Xs, ys, Xs.T @ Xs, -(Xs.T @ ys), A, col_norm, y_norm)
+
+
 class ConstrainedLeastSquares:
     """Reusable OSQP solver for Eq. 6 under ``A theta >= 0``.
 
@@ -229,42 +308,26 @@ class ConstrainedLeastSquares:
         #: The last :class:`QpSolution` returned (diagnostics and benchmarks).
         self.last_solution: QpSolution | None = None
 
-    # -- problem scaling -------------------------------------------------
-    @staticmethod
-    def _scaled(design, target, constraints):
-        X = np.asarray(design, float)
-        y = np.asarray(target, float)
-        col_norm = np.sqrt(np.einsum("ij,ij->j", X, X))
-        y_norm = float(np.sqrt(y @ y))
-        if (col_norm == 0.0).any() or y_norm == 0.0:
-            raise ValueError("constrained fit needs non-zero regressor columns and a non-zero moment")
-        Xs = X / col_norm
-        ys = y / y_norm
-        P = Xs.T @ Xs
-        q = -(Xs.T @ ys)
-        p = X.shape[1]
-        A = np.asarray(constraints, float).reshape(-1, p) / col_norm
-        row_norm = np.sqrt(np.einsum("ij,ij->i", A, A))
-        A = A / np.where(row_norm > 0.0, row_norm, 1.0)[:, None]
-        return X, y, Xs, ys, P, q, A, col_norm, y_norm
+    def _result(self, problem: ScaledProblem, xs: np.ndarray, status: str, info: dict, slack=None) -> QpSolution:
+        """The :class:`QpSolution` of the scaled solution ``xs`` (``slack = A @ xs`` when already known).
 
-    def _result(self, X, y, A, xs, status, iterations, polished, y_norm, col_norm, working_rows, rounds, slack=None):
-        """The :class:`QpSolution` of the scaled solution ``xs`` (``slack = A @ xs`` when already known)."""
+        ``info``: ``iterations``, ``polished``, ``working_rows``, ``rounds`` (as in :class:`QpSolution`).
+        """
         converged = status == "solved" and bool(np.isfinite(xs).all())
-        theta = xs * y_norm / col_norm
-        residual = y - X @ theta if np.isfinite(theta).all() else np.full_like(y, np.nan)
+        theta = problem.unscaled(xs)
+        A = problem.A
         if slack is None:
             slack = A @ xs if A.shape[0] else np.zeros(0)
         self.last_solution = QpSolution(
             coefficients=theta,
             status=status,
             converged=bool(converged),
-            sse=float(residual @ residual),
-            iterations=int(iterations),
-            polished=bool(polished),
+            sse=least_squares_objective(problem.design, problem.target, theta),
+            iterations=int(info["iterations"]),
+            polished=bool(info["polished"]),
             n_active=int((slack < 1e-7).sum()) if converged else 0,
-            working_rows=working_rows,
-            rounds=rounds,
+            working_rows=info["working_rows"],
+            rounds=info["rounds"],
         )
         return self.last_solution
 
@@ -289,9 +352,10 @@ class ConstrainedLeastSquares:
         """
         if not self.working_set:
             return self.solve_all_rows(design, target, constraints)
-        X, y, Xs, ys, P, q, A, col_norm, y_norm = self._scaled(design, target, constraints)
-        p = X.shape[1]
-        x = _unconstrained_optimum(P, q, Xs, ys)
+        problem = scaled_problem(design, target, constraints)
+        P, q, A = problem.P, problem.q, problem.A
+        p = q.size
+        x = _unconstrained_optimum(P, q, problem.scaled_design, problem.scaled_target)
         work = np.zeros(0, dtype=int)
         duals = np.zeros(0)
         iterations, rounds, polished = 0, 0, False
@@ -303,9 +367,8 @@ class ConstrainedLeastSquares:
             if work.size:
                 violated[work] = False
             if not violated.any():  # W's optimum is feasible: it is the full QP's optimum
-                return self._result(
-                    X, y, A, x, "solved", iterations, polished, y_norm, col_norm, work.size, rounds, slack=slack
-                )
+                info = {"iterations": iterations, "polished": polished, "working_rows": work.size, "rounds": rounds}
+                return self._result(problem, x, "solved", info, slack=slack)
             work = np.concatenate((work, _most_violated_per_run(slack, violated)))
             if work.size > self.max_working_rows or rounds >= self.max_rounds:
                 break
@@ -389,8 +452,9 @@ class ConstrainedLeastSquares:
 
         Parameters and return as :meth:`solve`.
         """
-        X, y, Xs, ys, P, q, A, col_norm, y_norm = self._scaled(design, target, constraints)
-        p = X.shape[1]
+        problem = scaled_problem(design, target, constraints)
+        P, q, A = problem.P, problem.q, problem.A
+        p = q.size
         if A.shape[0] == 0:
             A = np.zeros((1, p))  # keep OSQP's interface: one void row 0 <= 0 <= inf
         lower = np.zeros(A.shape[0])
@@ -399,7 +463,7 @@ class ConstrainedLeastSquares:
         # The unconstrained optimum: if it is feasible it is the QP optimum
         # (KKT with zero multipliers); OSQP then only confirms it and polishing
         # (which needs an active set) is switched off.
-        x_ols = np.linalg.lstsq(Xs, ys, rcond=None)[0]
+        x_ols = np.linalg.lstsq(problem.scaled_design, problem.scaled_target, rcond=None)[0]
         ols_feasible = bool((A @ x_ols >= -1e-9).all())
         P_csc, A_csc = _upper_csc(P), _dense_csc(A)
         shape = (p, A.shape[0])
@@ -422,9 +486,8 @@ class ConstrainedLeastSquares:
         xs = np.asarray(result.x, float)
         if status == "solved" and np.isfinite(xs).all():
             self._last_x[p] = xs.copy()
-        return self._result(
-            X, y, A, xs, status, iterations, int(result.info.status_polish) == 1, y_norm, col_norm, -1, 0
-        )
+        info = {"iterations": iterations, "polished": int(result.info.status_polish) == 1, "working_rows": -1, "rounds": 0}
+        return self._result(replace(problem, A=A), xs, status, info)
 
     def _right_signs(self, duals: np.ndarray) -> bool:
         """Every working-row multiplier has the sign of an active lower bound (OSQP's y <= 0, to ``eps``).

@@ -76,8 +76,7 @@ class StanceRegressors:
     moment_rows : ndarray, shape (N, 9)
         Joint moment M = M_s + M_d (N m, extensor positive), Eq. 5.
     spring_moment_rows, damper_moment_rows : ndarray, shape (N, 9)
-        M_s and M_d (N m) separately (Eq. 4 with the touchdown split above);
-        cached properties, built on first use.
+        M_s and M_d (N m) separately (Eq. 4 with the touchdown split above).
     stiffness_rows, damping_rows : ndarray, shape (N, 9)
         K (N m/rad) and B (N m s/rad), Eq. 3.
     spring_energy_rows : ndarray, shape (N, 9)
@@ -96,6 +95,8 @@ class StanceRegressors:
     rho0_rad: float
     omega0_rad_s: float
     moment_rows: np.ndarray
+    spring_moment_rows: np.ndarray
+    damper_moment_rows: np.ndarray
     stiffness_rows: np.ndarray
     damping_rows: np.ndarray
 
@@ -105,30 +106,14 @@ class StanceRegressors:
         return int(self.time_s.shape[0])
 
     @cached_property
-    def spring_moment_rows(self) -> np.ndarray:
-        """M_s (N m), shape (N, 9): the moment rows' spring columns m0, k0-k3 (damper columns 0)."""
-        rows = self.moment_rows.copy()
-        rows[:, _FIRST_DAMPER_COLUMN:] = 0.0
-        return rows
-
-    @cached_property
-    def damper_moment_rows(self) -> np.ndarray:
-        """M_d (N m), shape (N, 9): the moment rows' damper columns b0-b3 (spring columns 0)."""
-        rows = self.moment_rows.copy()
-        rows[:, :_FIRST_DAMPER_COLUMN] = 0.0
-        return rows
-
-    @cached_property
     def damper_power_rows(self) -> np.ndarray:
         """M_d * omega (W) = -P_d, Eq. 9, shape (N, 9) (the constraint is M_d * omega >= 0)."""
-        return self.damper_moment_rows * self.angular_velocity_rad_s[:, None]
+        return damper_power_regressors(self.damper_moment_rows, self.angular_velocity_rad_s)
 
     def damper_power_columns(self, columns: np.ndarray) -> np.ndarray:
         """``damper_power_rows[:, columns]`` (W per coefficient unit), shape (N, p), without the full matrix."""
-        columns = np.asarray(columns, dtype=int)
-        sub = self.moment_rows[:, columns] * self.angular_velocity_rad_s[:, None]
-        sub[:, columns < _FIRST_DAMPER_COLUMN] = 0.0
-        return sub
+        return damper_power_regressors(self.damper_moment_rows[:, np.asarray(columns, dtype=int)],
+                                       self.angular_velocity_rad_s)
 
     @cached_property
     def spring_energy_rows(self) -> np.ndarray:
@@ -154,27 +139,95 @@ class StanceRegressors:
     @cached_property
     def _spring_energy_polynomial(self) -> np.ndarray:
         """:attr:`spring_energy_rows` with the k3 column left 0: the closed-form columns, shape (N, 9)."""
-        d = self.delta_angle_rad
-        return _rows(d.size, {0: d, 1: d**2 / 2, 2: d**3 / 6, 3: d**4 / 12})
+        return spring_energy_polynomial_regressors(self.delta_angle_rad)
 
     @cached_property
     def _spring_energy_k3(self) -> np.ndarray:
         """k3 column of :attr:`spring_energy_rows`, ``int (int w omega dt) omega dt`` (J per N m s/rad^2), (N,)."""
-        return cumulative_integral(self.moment_rows[:, _K3_COLUMN] * self.angular_velocity_rad_s, self.time_s)
+        return spring_energy_k3_regressor(self.moment_rows[:, _K3_COLUMN], self.angular_velocity_rad_s, self.time_s)
 
 
 #: Column of k3 in :data:`PARAMETER_NAMES` (the only spring-energy column needing an integral).
 _K3_COLUMN = PARAMETER_NAMES.index("k3")
-#: First damper column (b0) in :data:`PARAMETER_NAMES`: columns before it are spring (m0, k0-k3).
-_FIRST_DAMPER_COLUMN = PARAMETER_NAMES.index("b0")
+#: Column of each parameter name in every ``*_rows`` matrix.
+_COLUMN: dict[str, int] = {name: index for index, name in enumerate(PARAMETER_NAMES)}
 
 
-def _rows(n: int, columns: dict[int, np.ndarray | float]) -> np.ndarray:
-    """(n, 9) rows with the given columns (index -> values or a constant) and zeros elsewhere."""
+def coefficient_rows(n: int, **terms: np.ndarray | float) -> np.ndarray:
+    """(n, 9) rows of a quantity linear in the parameters, from its term of each named coefficient.
+
+    ``coefficient_rows(n, k0=1.0, k1=d)`` is the quantity ``k0 + k1 d``: the
+    column of each named parameter (:data:`PARAMETER_NAMES`) holds what
+    multiplies it (a value per sample or a constant), every other column 0.
+    """
     rows = np.zeros((n, len(PARAMETER_NAMES)))
-    for index, values in columns.items():
-        rows[:, index] = values
+    for name, values in terms.items():
+        rows[:, _COLUMN[name]] = values
     return rows
+
+
+# -- the seed's equations, one function each (d = rho - rho0, w = omega - omega0) --------------------
+def stiffness_regressors(d: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Eq. 3, stiffness ``K = k0 + k1 d + k2 d**2 + k3 w`` (N m/rad), rows (N, 9)."""
+    return coefficient_rows(d.size, k0=1.0, k1=d, k2=d**2, k3=w)
+
+
+def damping_regressors(d: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Eq. 3, damping ``B = b0 + b1 w + b2 w**2 + b3 d`` (N m s/rad), rows (N, 9)."""
+    return coefficient_rows(d.size, b0=1.0, b1=w, b2=w**2, b3=d)
+
+
+def spring_moment_regressors(d: np.ndarray, int_w_drho: np.ndarray) -> np.ndarray:
+    """Eq. 4, spring moment ``M_s = m0 + int K d(rho)`` (N m), rows (N, 9).
+
+    ``M_s = m0 + k0 d + k1 d**2/2 + k2 d**3/3 + k3 int w d(rho)``, with
+    ``int_w_drho`` = ``int_t0^t w omega dt`` (path dependent, integrated
+    numerically) and m0 the spring part of the touchdown moment (module docstring).
+    """
+    return coefficient_rows(d.size, m0=1.0, k0=d, k1=d**2 / 2, k2=d**3 / 3, k3=int_w_drho)
+
+
+def damper_moment_regressors(omega: np.ndarray, w: np.ndarray, int_d_domega: np.ndarray) -> np.ndarray:
+    """Eq. 4, damper moment ``M_d = M_d0 + int B d(omega)`` (N m), rows (N, 9).
+
+    ``M_d = b0 omega + b1 w**2/2 + b2 w**3/3 + b3 int d d(omega)``: the
+    touchdown part ``M_d0 = b0 omega0`` is the linear damper at the touchdown
+    damping (module docstring), so ``b0 omega0 + b0 w = b0 omega``.
+    """
+    return coefficient_rows(omega.size, b0=omega, b1=w**2 / 2, b2=w**3 / 3, b3=int_d_domega)
+
+
+def joint_moment_regressors(spring_moment_rows: np.ndarray, damper_moment_rows: np.ndarray) -> np.ndarray:
+    """Eq. 5, joint moment ``M = M_s + M_d`` (N m, extensor positive), rows (N, 9).
+
+    The two parts have disjoint columns (m0, k0-k3 and b0-b3), so the sum
+    holds each part's numbers unchanged.
+    """
+    return spring_moment_rows + damper_moment_rows
+
+
+def spring_energy_polynomial_regressors(d: np.ndarray) -> np.ndarray:
+    """Eq. 8, spring energy ``E_s = int_t0^t M_s d(rho)`` (J) without its k3 term, rows (N, 9).
+
+    Closed form of the integral of Eq. 4's M_s: ``m0 d + k0 d**2/2 +
+    k1 d**3/6 + k2 d**4/12``; the k3 column (a path integral) is
+    :func:`spring_energy_k3_regressor`, left 0 here.
+    """
+    return coefficient_rows(d.size, m0=d, k0=d**2 / 2, k1=d**3 / 6, k2=d**4 / 12)
+
+
+def spring_energy_k3_regressor(int_w_drho: np.ndarray, omega: np.ndarray, time_s: np.ndarray) -> np.ndarray:
+    """Eq. 8, the k3 column of the spring energy: ``int_t0^t (int w d(rho)) omega dt`` (J per N m s/rad^2), (N,)."""
+    return cumulative_integral(int_w_drho * omega, time_s)
+
+
+def damper_power_regressors(damper_moment_rows: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """Eq. 9, damper power written as ``M_d omega = -P_d`` (W), rows of the same shape as ``damper_moment_rows``.
+
+    The constraint ``P_d <= 0`` is ``M_d omega >= 0``; columns of
+    ``damper_moment_rows`` (all nine or a subset) are multiplied sample by sample.
+    """
+    return damper_moment_rows * omega[:, None]
 
 
 def cumulative_integral(values: np.ndarray, time_s: np.ndarray) -> np.ndarray:
@@ -233,21 +286,12 @@ def stance_regressors(
     t = np.asarray(time_s, float)
     rho = np.asarray(angle_rad, float)
     omega = np.asarray(angular_velocity_rad_s, float)
-    n = t.shape[0]
     d = rho - rho[0]
     w = omega - omega[0]
-
     int_w_drho = cumulative_integral(w * omega, t)  # int (omega - omega0) d(rho)
     int_d_domega = d * w - int_w_drho  # by parts, d(t0) = 0
-
-    # M = M_s + M_d: the spring (columns 0-4) and damper (5-8) parts have
-    # disjoint columns, so each is the moment rows with the other part zeroed
-    # (StanceRegressors.spring_moment_rows, .damper_moment_rows).
-    moment = _rows(
-        n, {0: 1.0, 1: d, 2: d**2 / 2, 3: d**3 / 3, 4: int_w_drho, 5: omega, 6: w**2 / 2, 7: w**3 / 3, 8: int_d_domega}
-    )
-    stiffness = _rows(n, {1: 1.0, 2: d, 3: d**2, 4: w})
-    damping = _rows(n, {5: 1.0, 6: w, 7: w**2, 8: d})
+    spring = spring_moment_regressors(d, int_w_drho)
+    damper = damper_moment_regressors(omega, w, int_d_domega)
     return StanceRegressors(
         time_s=t,
         delta_angle_rad=d,
@@ -255,9 +299,11 @@ def stance_regressors(
         angular_velocity_rad_s=omega,
         rho0_rad=float(rho[0]),
         omega0_rad_s=float(omega[0]),
-        moment_rows=moment,
-        stiffness_rows=stiffness,
-        damping_rows=damping,
+        moment_rows=joint_moment_regressors(spring, damper),
+        spring_moment_rows=spring,
+        damper_moment_rows=damper,
+        stiffness_rows=stiffness_regressors(d, w),
+        damping_rows=damping_regressors(d, w),
     )
 
 
