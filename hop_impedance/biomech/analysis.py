@@ -75,9 +75,9 @@ class AnalysisOptions:
         Per-segment overrides applied to the scaled model.
     calibration_s : float or None
         The body model is scaled from the complete marker frames stamped
-        within this many seconds of the first complete frame
-        (:func:`calibration_markers`, the rule the live ``inverse_dynamics``
-        uses, so live and offline share one model); None = every frame.
+        within this many seconds of the first complete frame and before the
+        first take-off (:func:`calibration_markers`, the rule the live stage
+        uses, so live and offline share one model); None = no time limit.
     """
 
     marker_cutoff_hz: float = DEFAULT_CUTOFF_HZ
@@ -358,33 +358,45 @@ def analyze_recording(rec: Recording, options: AnalysisOptions | None = None) ->
     stances = detector.stances
     model = options.body_model
     if model is None and data.markers_xz is not None:
-        model = body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s), options.overrides)
+        until = rec.start_ns + round(detector.first_takeoff_s * 1e9) if np.isfinite(detector.first_takeoff_s) else None
+        model = body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s, until), options.overrides)
     results = analyze_span(data, stances, list(range(len(stances))), model, rec.subject.body_mass_kg, options)
     _reject_holes(results, data, options)
     return RecordingAnalysis(rec.subject, model, rec.start_ns, recording_info(rec), results, list(rec.warnings) + detector.warnings, options)
 
 
-def calibration_markers(markers: MarkerSeries, calibration_s: float | None) -> MarkerSeries:
-    """The marker frames the body model is scaled from: one rule for ``analyze`` and the live node.
+#: Stamp tolerance of the calibration window's bounds (ns): the live stage works on float seconds, so a
+#: frame exactly ``calibration_s`` after the first must not fall out through round-off.
+CALIBRATION_TOLERANCE_NS = 1000
+
+
+def calibration_markers(markers: MarkerSeries, calibration_s: float | None, until_ns: int | None = None) -> MarkerSeries:
+    """The marker frames the body model is scaled from: one rule for ``analyze`` and the live stage.
 
     The complete frames (every contract marker visible) whose stamp lies
     within ``calibration_s`` of the first complete frame's stamp (integer
-    nanoseconds, bounds included). The rule depends on stamps only, so the
-    live ``inverse_dynamics``, which waits for the first frame stamped
-    beyond the window and then calls this on what it holds, gets the same
+    nanoseconds, bounds included) and not after ``until_ns``, the first
+    take-off the detector announced (:attr:`StanceDetector.first_takeoff_s`):
+    so the model is ready when the first stance ends and the first profile is
+    not held back by the calibration (issue 15: it waited ~0.4 s for the 1 s
+    window). The rule depends on stamps only, so the live stage, which scales
+    the model once its marker stream has passed the window, gets the same
     frames whatever the message batching (it used to take every frame that
     had arrived when it started: 115 frames in one run, 140 in another, and
-    a hip k1 0.45 % away from offline). ``calibration_s`` None: every
-    complete frame. No complete frame: the series unchanged (the model
-    scaling then names what is missing).
+    a hip k1 0.45 % away from offline). ``calibration_s`` None: no time limit.
+    If the first take-off comes before the first complete frame, the window
+    ignores it. No complete frame: the series unchanged (the model scaling
+    then names what is missing).
     """
     complete = np.all(np.isfinite(sagittal_markers(markers)), axis=(1, 2))
     if not complete.any():
         return markers
-    keep = complete
+    first = int(markers.stamp_ns[complete][0])
+    keep = complete & (markers.stamp_ns >= first)
     if calibration_s is not None:
-        first = int(markers.stamp_ns[complete][0])
-        keep = complete & (markers.stamp_ns >= first) & (markers.stamp_ns - first <= round(calibration_s * 1e9))
+        keep &= markers.stamp_ns - first <= round(calibration_s * 1e9) + CALIBRATION_TOLERANCE_NS
+    if until_ns is not None and (keep & (markers.stamp_ns <= until_ns)).any():
+        keep &= markers.stamp_ns <= until_ns
     return MarkerSeries(markers.stamp_ns[keep], markers.names, markers.positions_m[keep])
 
 

@@ -27,9 +27,15 @@ Agreement with the batch analysis
 Low-latency mode (``post_pad_s`` given)
 ---------------------------------------
 The window ends ``post_pad_s`` after take-off instead of at the next
-touchdown, so a stance is emitted as soon as the take-off is confirmed (the
-detector needs ``min_flight_s`` = 50 ms of flight) and the data reach
-``takeoff + post_pad_s`` (plus one marker frame). Differences from batch,
+touchdown, so a stance is emitted as soon as the take-off is *announced*
+(the detector's provisional take-off, ``provisional_s`` = 5 ms below the
+level) and the data reach ``takeoff + post_pad_s``: the force samples, and
+the marker stream up to its last frame stamped at or before the window's end
+(known complete once the next frame, one nominal period on, would lie
+beyond the end; no frame past the end is waited for or used). If the
+detector withdraws the take-off (the force came back within
+``min_flight_s``), the stage emits a :data:`WITHDRAWN` result for that
+stance (no joint data) and analyses it again at its real take-off. Differences from batch,
 all at the end of the stance: the plate offset of the following flight is
 the mean of its first ``post_pad_s - flight_margin_s`` only, and the
 zero-lag filters and splines see the window edge ``post_pad_s`` after
@@ -53,10 +59,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from hop_impedance.biomech.analysis import AnalysisOptions, SpanData, StanceResult, analyze_span
+from hop_impedance.biomech.analysis import AnalysisOptions, SpanData, StanceResult, analyze_span, calibration_markers
 from hop_impedance.biomech.body_model import BodyModel
+from hop_impedance.biomech.kinematics import body_model_from_markers
 from hop_impedance.biomech.stance_detection import ContactEvent, DetectorOptions, Stance, StanceDetector
-from hop_impedance.recording import GRAVITY_M_S2
+from hop_impedance.recording import GRAVITY_M_S2, MARKER_NAMES, MarkerSeries, Subject
+
+#: Rejection reason of a stance whose provisional take-off was withdrawn (its earlier result is void).
+WITHDRAWN = "take-off withdrawn"
 
 
 class StanceDetectorStage:
@@ -97,6 +107,15 @@ class StanceAnalysisStage:
     post_pad_s : float or None
         None (default) gives batch-identical results (window up to the next
         touchdown); a value selects the low-latency mode (module docstring).
+    subject : Subject, optional
+        With ``model`` None: scale the body model from the streamed markers by
+        the rule ``analyze`` uses (:func:`analysis.calibration_markers`: the
+        complete frames within ``calibration_s`` of the first and not after
+        the first announced take-off), as soon as the marker stream has passed
+        that window; stances wait for it. Without any marker frame after
+        ``2 calibration_s`` of force (or at the end), the stream is force-only
+        (stances without joint data, as offline). :attr:`notes` says what
+        happened, one line each (for a log).
     """
 
     def __init__(
@@ -105,6 +124,7 @@ class StanceAnalysisStage:
         body_mass_kg: float,
         options: AnalysisOptions | None = None,
         post_pad_s: float | None = None,
+        subject: Subject | None = None,
     ) -> None:
         if post_pad_s is not None and not post_pad_s > 0:
             raise ValueError(f"post_pad_s must be > 0 s (or None for batch mode), got {post_pad_s}")
@@ -121,6 +141,10 @@ class StanceAnalysisStage:
         self._next = 0  # index of the next stance to emit
         self._force_period = NominalPeriod()
         self._marker_period = NominalPeriod()
+        self.subject = subject
+        self.calibrating = model is None and subject is not None
+        self.notes: list[str] = []
+        self._provisional_out: Stance | None = None  # an emitted stance whose take-off is provisional
 
     def push(
         self,
@@ -148,27 +172,106 @@ class StanceAnalysisStage:
             for ev in self.detector.push(t, w[:, 1]):
                 if ev.kind == "touchdown":
                     self._last_touchdown_s = ev.time_s
-        return self._emit_ready(final=False)
+        if self.calibrating:
+            self._calibrate(final=False)
+        return self._withdrawn() + self._emit_ready(final=False)
 
     def flush(self) -> list[StanceResult]:
         """End of stream: emit every remaining stance with the data available."""
         self.detector.flush()
-        return self._emit_ready(final=True)
+        if self.calibrating:
+            self._calibrate(final=True)
+        return self._withdrawn() + self._emit_ready(final=True)
+
+    # -- body model ------------------------------------------------------------
+
+    def _calibrate(self, final: bool) -> None:
+        """Scale the body model once the markers of the calibration window are all in (see ``subject``)."""
+        cal_s = self.options.calibration_s
+        if not self._marker_t:
+            span = float(self._force_t[-1][-1] - self._force_t[0][0]) if self._force_t else 0.0
+            if final or span >= 2 * (cal_s or 1.0):
+                self.calibrating = False
+                self.notes.append("no marker data: force-only, stances without joint data")
+            return
+        t = np.concatenate(self._marker_t)
+        xz = np.concatenate(self._markers)
+        complete = np.all(np.isfinite(xz), axis=(1, 2))
+        if not final:
+            if not complete.any():
+                return
+            first = float(t[complete][0])
+            end = first + cal_s if cal_s is not None else np.inf
+            takeoff = self.detector.first_takeoff_s
+            if np.isfinite(takeoff) and takeoff >= first:
+                end = min(end, takeoff)
+            if not self._markers_complete_to(end):
+                return
+        self.calibrating = False
+        positions = np.zeros(xz.shape[:2] + (3,))
+        positions[:, :, 0], positions[:, :, 2] = xz[:, :, 0], xz[:, :, 1]
+        takeoff = self.detector.first_takeoff_s
+        until = round(takeoff * 1e9) if np.isfinite(takeoff) else None
+        frames = calibration_markers(MarkerSeries(np.round(t * 1e9).astype(np.int64), MARKER_NAMES, positions), cal_s, until)
+        try:
+            self.model = body_model_from_markers(self.subject, frames, self.options.overrides)
+        except ValueError as exc:
+            self.notes.append(f"body model: {exc}")
+            return
+        span_s = (frames.stamp_ns[-1] - frames.stamp_ns[0]) * 1e-9
+        self.notes.append(f"body model scaled from {len(frames)} marker frames ({span_s:.2f} s)")
+
+    def _markers_complete_to(self, end_s: float) -> bool:
+        """Every marker frame stamped at or before ``end_s`` is in (the stream is stamp-sorted).
+
+        True once a frame beyond ``end_s`` arrived, or, with the stream's
+        nominal period known, once the next frame would be stamped beyond it.
+        """
+        last = float(self._marker_t[-1][-1])
+        period = self._marker_period.value
+        return last > end_s or (period is not None and last + period > end_s + 0.25 * period)
+
+    # -- withdrawals -----------------------------------------------------------
+
+    def _withdrawn(self) -> list[StanceResult]:
+        """A :data:`WITHDRAWN` result for an emitted stance whose provisional take-off the detector withdrew."""
+        out = self._provisional_out
+        if out is None:
+            return []
+        k = self._next - 1
+        confirmed = self._final_stances(provisional=False)
+        if len(confirmed) > k and confirmed[k].takeoff_s == out.takeoff_s:
+            self._provisional_out = None  # confirmed: the emitted result stands
+            return []
+        now = self.detector.provisional_stance
+        if now is not None and now.takeoff_s == out.takeoff_s:
+            return []  # still provisional
+        self._provisional_out = None
+        self._next = k
+        return [StanceResult(k, out.touchdown_s, out.takeoff_s, out.complete,
+                             f"{WITHDRAWN}: the force came back within min_flight_s "
+                             f"({self.options.detector.min_flight_s:g} s) of the announced take-off, the stance goes on",
+                             out.contact_time_s, float("nan"), float("nan"), None, None, None)]
 
     # -- internals -------------------------------------------------------------
 
-    def _final_stances(self) -> list[Stance]:
-        """Stances whose take-off is confirmed.
+    def _final_stances(self, provisional: bool = True) -> list[Stance]:
+        """Stances whose take-off is known.
 
         The detector appends a stance to ``stances`` only at the next
         touchdown (its trailing flight baseline is then known); in
         low-latency mode the stance waiting for that (``pending_stance``)
-        counts as final from its confirmed take-off on.
+        counts as final from its confirmed take-off on, and (``provisional``)
+        one whose take-off is only announced from the announcement on.
         """
         stances = list(self.detector.stances)
+        if self.post_pad_s is None:
+            return stances
         pending = pending_stance(self.detector)
-        if self.post_pad_s is not None and pending is not None:
+        if pending is not None:
             stances.append(pending)
+        elif provisional and self.detector.provisional_stance is not None:
+            stances.append(self.detector.provisional_stance)
         return stances
 
     def _known_stances(self) -> list[Stance]:
@@ -193,7 +296,7 @@ class StanceAnalysisStage:
 
     def _emit_ready(self, final: bool) -> list[StanceResult]:
         out: list[StanceResult] = []
-        if not self._force_t:
+        if not self._force_t or self.calibrating:
             return out
         stances = self._known_stances()
         n_final = len(self._final_stances())
@@ -206,12 +309,15 @@ class StanceAnalysisStage:
                 end = np.inf  # the last flight runs to the end of the data, as in batch
             data = self._span(start, end)
             result = analyze_span(data, stances, [k], self.model, self.body_mass_kg, self.options)[0]
-            out.append(self._reject_on_loss(result, data))
+            out.append(self._reject_on_loss(result, data, end))
             self._next += 1
+            provisional = self.detector.provisional_stance
+            if provisional is not None and stances[k] is provisional:
+                self._provisional_out = provisional
         self._trim(stances)
         return out
 
-    def _reject_on_loss(self, result: StanceResult, data: SpanData) -> StanceResult:
+    def _reject_on_loss(self, result: StanceResult, data: SpanData, end_s: float) -> StanceResult:
         """Drop the joint data of a stance whose samples have holes (see Message loss).
 
         Loss is named first even when the analysis already rejected the stance
@@ -220,6 +326,7 @@ class StanceAnalysisStage:
         reason = missing_samples_reason(
             data, result.touchdown_s, result.takeoff_s, self.options.max_gap_s,
             force_period_s=self._force_period.value, marker_period_s=self._marker_period.value,
+            data_end_s=end_s if self.post_pad_s is not None else None,
         )
         if reason is not None:
             earlier = result.rejection_reason
@@ -231,6 +338,8 @@ class StanceAnalysisStage:
         force_ok = self._force_t[-1][-1] >= end_s
         if self.model is None or not self._marker_t:
             return bool(force_ok)
+        if self.post_pad_s is not None:  # markers up to the window's end, none beyond (module docstring)
+            return bool(force_ok and self._markers_complete_to(end_s))
         # One marker frame beyond the window so the spline is interpolating, not extrapolating.
         return bool(force_ok and self._marker_t[-1][-1] > end_s)
 
@@ -243,7 +352,8 @@ class StanceAnalysisStage:
             tm = np.concatenate(self._marker_t)
             xz = np.concatenate(self._markers)
             dt = float(np.median(np.diff(tm))) if tm.size > 1 else 0.0
-            msel = (tm >= start_s - dt) & (tm <= end_s + dt)
+            # low-latency: no frame after the window's end (it may or may not have arrived yet)
+            msel = (tm >= start_s - dt) & (tm <= end_s + (dt if self.post_pad_s is None else 0.0))
             data.marker_t_s, data.markers_xz = tm[msel], xz[msel]
         return data
 
@@ -255,6 +365,10 @@ class StanceAnalysisStage:
             keep_from = stances[-1].takeoff_s - self.options.pad_s - 0.1
         else:
             keep_from = float(self._force_t[-1][-1]) - 10.0
+        if self._provisional_out is not None and self._next - 1 < len(stances):  # may be withdrawn and redone
+            keep_from = min(keep_from, self._window(stances, self._next - 1)[0] - 0.1)
+        if self.calibrating:
+            return  # every marker frame may still be in the calibration window
         for ts, vs in ((self._force_t, self._wrench), (self._marker_t, self._markers)):
             if ts:
                 t = np.concatenate(ts)
@@ -312,6 +426,7 @@ def missing_samples_reason(
     max_gap_s: float,
     force_period_s: float | None = None,
     marker_period_s: float | None = None,
+    data_end_s: float | None = None,
 ) -> str | None:
     """Why a stance's data have holes from lost messages, or None.
 
@@ -326,6 +441,9 @@ def missing_samples_reason(
     force_period_s, marker_period_s : float, optional
         Nominal sampling periods (s) of the streams (:class:`NominalPeriod`);
         default: the median step of the window, which heavy loss inflates.
+    data_end_s : float, optional
+        End of a short window (s): marker frames are expected only up to it
+        (the last one may be up to one frame period before it).
 
     Returns
     -------
@@ -343,7 +461,8 @@ def missing_samples_reason(
     reason = _hole_reason(data.force_t_s, touchdown_s, takeoff_s, 1.5, 0.0, "force", force_period_s)
     if reason is None and data.marker_t_s is not None and len(data.marker_t_s) > 2:
         dt = marker_period_s or float(np.median(np.diff(data.marker_t_s)))
-        reason = _hole_reason(data.marker_t_s, touchdown_s - dt, takeoff_s + dt, 1.0, max_gap_s, "marker", marker_period_s)
+        end = takeoff_s + dt if data_end_s is None else min(takeoff_s + dt, data_end_s)
+        reason = _hole_reason(data.marker_t_s, touchdown_s - dt, end, 1.0, max_gap_s, "marker", marker_period_s)
     return reason
 
 

@@ -97,6 +97,14 @@ class StancePool:
         """Forget every stance (e.g. when the subject changes)."""
         self._fits.clear()
 
+    def withdraw(self, fit) -> bool:
+        """Take out a fit added earlier (its stance's take-off was withdrawn); True if it was in the pool."""
+        for i, f in enumerate(self._fits):
+            if f is fit:
+                del self._fits[i]
+                return True
+        return False
+
     def estimate(self, term: str) -> PooledEstimate:
         """Pooled ``term`` (e.g. ``"k0"``) over the pool's fits that carry it."""
         values = [f.coefficients.get(term, np.nan) for f in self._fits]

@@ -34,6 +34,13 @@ and publishes, per stance:
 A stance rejected by an input check turns this node's ``/diagnostics`` to
 ERROR with the rule's reason.
 
+Issue 15: in low-latency mode a stance arrives 5 ms after its *provisional*
+take-off. If the detector withdraws that take-off (the force came back within
+``min_flight_s``), ``inverse_dynamics`` sends the stance again rejected with
+:data:`stages.WITHDRAWN`: its fits leave the pools, and the feed publishes
+every joint ``valid = false`` with that reason until the stance's real
+take-off brings it again.
+
 Model structure (one per joint for the session, ``recording_fits``, "One
 model per trial"): ``model_terms_ankle``, ``model_terms_knee``,
 ``model_terms_hip`` (default the seed's reduced model k0, k1, b0) are fitted
@@ -58,7 +65,7 @@ import numpy as np
 from rclpy.node import Node
 
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
-from hop_impedance.biomech.stages import equivalent_linear_impedance
+from hop_impedance.biomech.stages import WITHDRAWN, equivalent_linear_impedance
 from hop_impedance.impedance.plausibility import PlausibilityBounds, controller_damping, controller_rejection
 from hop_impedance.impedance.pooling import StancePool
 from hop_impedance.input_checks import INPUT_CHECK_PREFIX
@@ -133,14 +140,23 @@ class ImpedanceEstimatorNode(Node):
         self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
         if self.max_age_s > 0:
             self.create_timer(self.max_age_s / 10.0, self._expire)
+        # (touchdown ns, take-off ns, withdrawn) of the stances heard: a provisional stance, its withdrawal
+        # and the same stance at its real take-off are three different messages
         self.seen_touchdowns: collections.deque = collections.deque(maxlen=4 * STANCE_HISTORY)
+        self.last_pooled: tuple = (None, {})  # (touchdown, take-off) of the last stance and its pooled fits
         self.diagnostics = Diagnostics(self, diag, self._diag_values, self._diag_level)
 
     def _on_stance(self, msg: StanceKinetics) -> None:
         touchdown_ns = stamp_ns(msg.touchdown_stamp)
-        if touchdown_ns in self.seen_touchdowns:  # heard live and again from the transient-local history
+        withdrawn = msg.rejection_reason.startswith(WITHDRAWN)
+        key = (touchdown_ns, stamp_ns(msg.takeoff_stamp), withdrawn)
+        if key in self.seen_touchdowns:  # heard live and again from the transient-local history
             return
-        self.seen_touchdowns.append(touchdown_ns)
+        self.seen_touchdowns.append(key)
+        if withdrawn and self.last_pooled[0] == key[:2]:
+            # the provisional take-off was a dip: its fits leave the pools; the feed turns invalid below
+            for name, fit in self.last_pooled[1].items():
+                self.pools[name].withdraw(fit)
         t_start = time.perf_counter()
         self.stances_in += 1
         stance = stance_from_message(msg)
@@ -151,7 +167,7 @@ class ImpedanceEstimatorNode(Node):
                 f"{j} {' '.join(s.terms)} ({s.reason})" for j, s in self.selector.structures.items()))
         self.fit_s.append(time.perf_counter() - t_start)
         latency = (time.time_ns() - msg.takeoff_received_ns) * 1e-9 if msg.takeoff_received_ns else math.nan
-        if math.isfinite(latency):
+        if math.isfinite(latency) and not withdrawn:
             self.latency_s.append(latency)
         for j, name in enumerate(JOINT_NAMES):
             self.pub_profile.publish(profile_message(msg, name, fits[name], latency))
@@ -164,6 +180,7 @@ class ImpedanceEstimatorNode(Node):
                   if touchdown_ns < self.subject_since_ns else None)
         subject_mass = self.subject_key[1] if self.subject_key is not None else None
         reasons = update_feed(self.feed, msg, stance, fits, self.bounds, self.pools, before, subject_mass)
+        self.last_pooled = (key[:2], {name: fits[name] for name in JOINT_NAMES if reasons[name] is None})
         for j, name in enumerate(JOINT_NAMES):
             if reasons[name] is None:
                 self.valid_since_ns[j] = msg.takeoff_received_ns or time.time_ns()

@@ -2,12 +2,13 @@
 
 Thin adapter around :class:`hop_impedance.biomech.stages.StanceAnalysisStage`:
 
-- ``/subject`` (transient-local) gives mass, height; the body model is scaled
-  from the complete marker frames stamped within ``calibration_s`` of the
-  first one (:func:`hop_impedance.biomech.analysis.calibration_markers`, the
-  rule ``analyze`` uses too): the node waits for the first marker frame
-  stamped beyond that window, so the model does not depend on how the
-  messages were batched, and equals the offline one.
+- ``/subject`` (transient-local) gives mass, height; the stage then scales
+  the body model itself from the complete marker frames stamped within
+  ``calibration_s`` of the first one and not after the first announced
+  take-off (:func:`hop_impedance.biomech.analysis.calibration_markers`, the
+  rule ``analyze`` uses too), once its marker stream has passed that window,
+  so the model does not depend on how the messages were batched, equals the
+  offline one, and is ready when the first stance ends.
 - Force (1 kHz) and markers (100 Hz) arrive at different rates, with jitter,
   loss and possibly out of order. Each stream goes through a reorder buffer
   (``reorder_window_s`` of stamp time); the stage itself waits until both
@@ -32,8 +33,9 @@ Thin adapter around :class:`hop_impedance.biomech.stages.StanceAnalysisStage`:
   the same parameters (:func:`stance_detector.declare_detector_options`) and
   body weight, so the analysed stances are the published ``/stance/events``.
 - ``low_latency`` selects the stage's low-latency mode (window ends
-  ``post_pad_s`` after take-off); default false = results equal to
-  ``hop-impedance analyze``.
+  ``post_pad_s`` after the provisional take-off); a withdrawn take-off is
+  published as a stance rejected with :data:`stages.WITHDRAWN`, so the
+  estimator withdraws what it published for it.
 """
 
 from __future__ import annotations
@@ -46,8 +48,7 @@ from geometry_msgs.msg import WrenchStamped
 from rclpy.node import Node
 from std_msgs.msg import Header
 
-from hop_impedance.biomech.analysis import AnalysisOptions, StanceResult, calibration_markers
-from hop_impedance.biomech.kinematics import body_model_from_markers
+from hop_impedance.biomech.analysis import AnalysisOptions, StanceResult
 from hop_impedance.biomech.stages import StanceAnalysisStage
 from hop_impedance.nodes.common import (
     END_TOPIC, JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC, Diagnostics, InputTracker, ProgressReporter,
@@ -55,7 +56,7 @@ from hop_impedance.nodes.common import (
 )
 from hop_impedance.nodes.qos import history_qos, input_qos, latched_qos, result_qos
 from hop_impedance.nodes.stance_detector import declare_detector_options
-from hop_impedance.recording import FORCE_TOPIC, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, MarkerSeries, Subject
+from hop_impedance.recording import FORCE_TOPIC, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, Subject
 from hop_impedance_msgs.msg import JointKinetics, MarkerArray, StanceKinetics, SubjectInfo
 
 
@@ -82,8 +83,7 @@ class InverseDynamicsNode(Node):
         self.subject: Subject | None = None
         self.stage: StanceAnalysisStage | None = None
         self.t0_ns: int | None = None
-        self.calib: list[tuple[int, np.ndarray]] = []  # complete marker frames (stamp ns, xz) until the model is scaled
-        self.newest_marker_ns: int | None = None  # newest released marker stamp (the stream is stamp-sorted)
+        self._notes_logged = 0
         self.force_buf = ReorderBuffer(int(reorder_s * 1e9))
         self.marker_buf = ReorderBuffer(int(reorder_s * 1e9))
         self.pending_force: list[tuple[int, object]] = []  # released, waiting for the body model
@@ -151,7 +151,7 @@ class InverseDynamicsNode(Node):
         """End of a replayed stream: analyse what remains (the last stance) and report finished."""
         self.process(everything=True)
         if self.stage is None and (self.subject is not None or self.guard.failure is not None):
-            self._start_stage(force_model=True)
+            self._start_stage()
             if self.stage is not None:  # the data held while waiting for the model
                 for res in self.stage.push(self._force_arrays(self.pending_force), self._marker_arrays(self.pending_markers)):
                     self._publish(res)
@@ -159,6 +159,7 @@ class InverseDynamicsNode(Node):
         if self.stage is not None:
             for res in self.stage.flush():
                 self._publish(res)
+            self._log_notes()
         self.lost_after_last = self.sorted_force.take_lost_before(2**63 - 1)
         if self.sorted_force.lost:
             self.get_logger().warning(
@@ -195,9 +196,6 @@ class InverseDynamicsNode(Node):
         if self.stage is None:
             self.pending_force += forces
             self.pending_markers += markers
-            self.calib += [m for m in markers if np.all(np.isfinite(m[1]))]
-            if markers:
-                self.newest_marker_ns = int(markers[-1][0])
             self._start_stage()
             if self.stage is None:
                 self._bound_pending()
@@ -211,7 +209,14 @@ class InverseDynamicsNode(Node):
             self.analysis_s.append(time.perf_counter() - t_start)
         for res in results:
             self._publish(res)
+        self._log_notes()
         self._note_processed(forces, markers)
+
+    def _log_notes(self) -> None:
+        """The stage's notes (body model scaled, force-only), each logged once."""
+        for note in self.stage.notes[self._notes_logged:]:
+            (self.get_logger().info if note.startswith("body model scaled") else self.get_logger().warning)(note)
+        self._notes_logged = len(self.stage.notes)
 
     def _note_processed(self, forces, markers) -> None:
         for topic, items in ((FORCE_TOPIC, forces), (MARKER_TOPIC, markers)):
@@ -221,48 +226,16 @@ class InverseDynamicsNode(Node):
         if forces:
             self.diagnostics.sample_ns = int(forces[-1][0])
 
-    def _start_stage(self, force_model: bool = False) -> None:
-        """Scale the body model once the subject is known and a marker frame stamped beyond the calibration window is in.
+    def _start_stage(self) -> None:
+        """Start the stage once the subject is known; it scales the body model from the markers itself.
 
-        The released marker stream is stamp-sorted (reorder buffer; later
-        frames are dropped as too late), so no frame of the window can come
-        after that one: the frames used are fixed by their stamps alone.
+        A failed input check: no model (every stance still gets a row with its reason).
         """
-        if self.guard.failure is not None or self._force_only(force_model):
-            # failed input check, or no markers at all: no model; every stance still gets a row with its reason
+        if self.guard.failure is not None:
             mass = self.subject.body_mass_kg if self.subject is not None else math.nan
             self.stage = StanceAnalysisStage(None, mass, self.options, self.post_pad_s)
-            return
-        if self.subject is None or not self.calib:
-            return
-        window_ns = round(self.calibration_s * 1e9)
-        if self.newest_marker_ns - self.calib[0][0] <= window_ns and not force_model:
-            return
-        stamps = np.array([c[0] for c in self.calib], np.int64)
-        xz = np.stack([c[1] for c in self.calib])
-        positions = np.zeros(xz.shape[:2] + (3,))
-        positions[:, :, 0], positions[:, :, 2] = xz[:, :, 0], xz[:, :, 1]
-        frames = calibration_markers(MarkerSeries(stamps, MARKER_NAMES, positions), self.calibration_s)
-        stamps = frames.stamp_ns
-        span_s = (stamps[-1] - stamps[0]) * 1e-9
-        try:
-            model = body_model_from_markers(self.subject, frames)
-        except ValueError as exc:
-            self.get_logger().error(f"body model: {exc}")
-            return
-        self.stage = StanceAnalysisStage(model, self.subject.body_mass_kg, self.options, self.post_pad_s)
-        self.calib = []
-        self.get_logger().info(f"body model scaled from {len(stamps)} marker frames ({span_s:.2f} s)")
-
-    def _force_only(self, at_end: bool) -> bool:
-        """No marker message at all with the subject known, at the end or after 2 x ``calibration_s`` of force."""
-        if self.subject is None or self.calib or self.trackers[MARKER_TOPIC].received or not self.pending_force:
-            return False
-        span_s = (self.pending_force[-1][0] - self.pending_force[0][0]) * 1e-9
-        if at_end or span_s >= 2 * self.calibration_s:
-            self.get_logger().warning(f"no {MARKER_TOPIC} messages: force-only, stances without joint data")
-            return True
-        return False
+        elif self.subject is not None:
+            self.stage = StanceAnalysisStage(None, self.subject.body_mass_kg, self.options, self.post_pad_s, subject=self.subject)
 
     def _bound_pending(self, max_s: float = 30.0) -> None:
         """Without a subject, keep at most ``max_s`` of data (older samples are counted as lost)."""
@@ -323,7 +296,8 @@ class InverseDynamicsNode(Node):
         out["stances_rejected"] = self.rejected
         out["analysis_p50_ms"] = _pct(self.analysis_s, 50)
         out["analysis_p99_ms"] = _pct(self.analysis_s, 99)
-        out["body_model"] = "ready" if self.stage is not None else "waiting for subject/markers"
+        out["body_model"] = ("waiting for the subject" if self.stage is None else "calibrating" if self.stage.calibrating
+                             else "ready" if self.stage.model is not None else "none (force-only)")
         out["force_duplicates_dropped"] = self.force_buf.duplicates
         out["markers_duplicates_dropped"] = self.marker_buf.duplicates
         out |= self.guard.values()
