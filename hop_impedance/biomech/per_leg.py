@@ -19,6 +19,46 @@ Single-leg hopping: the plate of the leg in the air never passes the touchdown
 level, so that leg has no stance and the other is analysed alone. The
 detector's levels scale with the *whole* body weight (6 % to touch down),
 which one foot carrying half of it passes just as well.
+
+Rigid-segment fit (the per-leg default, ``rigid=True``)
+-------------------------------------------------------
+Skin markers do not keep a leg's segment lengths: on the real OpenCap drop
+jump the ankle-knee and knee-hip distances change by up to 2.9 cm during the
+contact. The v1 (lumped) kinematics use the measured joint points frame by
+frame, so the moment arms of one foot's ~1000 N change with the skin; a rigid
+multibody model (OpenSim's) cannot follow that and disagreed by 17-33 % of
+peak. Per leg we therefore do what a biomechanist does before inverse
+dynamics (OpenSim's IK, then its coordinate filter):
+
+1. Segment lengths and the foot triangle are fixed from the calibration frames
+   (the same :func:`body_model_from_markers` model the analysis uses).
+2. Per marker frame, the leg's pose - hip ``x, z`` and the foot, shank and
+   thigh angles q1..q3 - is fitted to that leg's toe, heel, ankle, knee and
+   hip markers by unweighted least squares (Gauss-Newton,
+   :func:`fit_leg_pose`). The HAT is not part of the leg: the head marker
+   does not pull the leg's pose; q4 is the direction hip -> head.
+3. The coordinates are interpolated by cubic spline onto a
+   :data:`RIGID_RATE_HZ` grid and low-passed there at
+   ``options.marker_cutoff_hz`` (the same zero-lag Butterworth as the markers
+   would be; :func:`smooth_pose`), and the six markers rebuilt on the rigid
+   leg (:func:`rigid_leg_markers`).
+4. The v1 analysis runs on these markers with its marker filter at
+   :data:`PASS_THROUGH_HZ` (it leaves a 12 Hz signal unchanged: the filtering
+   was done on the coordinates, where it keeps the leg rigid; filtering each
+   rebuilt marker again bends the leg in the impact: 8-10 % of the hip's peak).
+   Why the finer grid: the v1 kinematics differentiate the spline of each
+   segment's centre-of-mass path; at the data's 100 Hz that path's second
+   derivative differs from the multibody one (from the angles) by up to 5 %
+   of the hip's peak in the landing impact; on the band-limited 1 kHz
+   coordinates the two agree (OpenSim's InverseDynamicsTool on the same
+   coordinates: within 0.06 % of each joint's peak,
+   ``test/bilateral/test_per_leg_opensim.py``).
+   ``analysis.options`` are the caller's (the data's bandwidth is the
+   coordinates' cut-off, which is what the impedance fit needs).
+
+``rigid=False`` gives the previous behaviour (the v1 kinematics on the leg's
+markers as measured), used to check that left + right add up to the lumped
+analysis when the kinematics are the same.
 """
 
 from __future__ import annotations
@@ -26,14 +66,139 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from hop_impedance.bilateral import SIDES, BilateralRecording
 from hop_impedance.biomech.analysis import AnalysisOptions, RecordingAnalysis, analyze_recording, calibration_markers
 from hop_impedance.biomech.body_model import BodyModel
-from hop_impedance.biomech.kinematics import body_model_from_markers
+from hop_impedance.biomech.filtering import fill_gaps, lowpass, sampling_rate_hz
+from hop_impedance.biomech.kinematics import _POINT_IDX, body_model_from_markers, sagittal_markers, segment_angles_from_points
+from hop_impedance.recording import MARKER_NAMES, MarkerSeries
 
 #: The segments of one leg (the HAT belongs to neither).
 LEG_SEGMENTS = ("foot", "shank", "thigh")
+
+#: Rate (Hz) of the rebuilt rigid-leg markers (see the module docstring, step 4).
+RIGID_RATE_HZ = 1000.0
+#: The analysis' marker cut-off on the rebuilt markers (Hz): a pass-through for coordinates low-passed at
+#: 12 Hz (gain 1 - 1e-5 there; 0.998 at the 40 Hz of the noise-free recovery bench).
+PASS_THROUGH_HZ = 200.0
+#: Pose coordinates of :func:`fit_leg_pose`, in column order.
+POSE_COORDINATES = ("hip_x", "hip_z", "q1_foot", "q2_shank", "q3_thigh", "q4_hat")
+_LEG_MARKERS = [MARKER_NAMES.index(n) for n in ("toe", "heel", "ankle", "knee", "hip")]
+_HEAD, _HIP = MARKER_NAMES.index("head"), MARKER_NAMES.index("hip")
+
+
+def _unit(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Segment axis (cos q, sin q) and its normal (-sin q, cos q), each (..., 2)."""
+    c, s = np.cos(q), np.sin(q)
+    return np.stack([c, s], axis=-1), np.stack([-s, c], axis=-1)
+
+
+def leg_pose_markers(pose: np.ndarray, model: BodyModel) -> np.ndarray:
+    """The six contract markers ``[x, z]`` (N, 6, 2) of the rigid leg in pose ``pose`` (N, 6), :data:`POSE_COORDINATES`.
+
+    Down from the hip at the model's fixed lengths: knee, ankle, toe; the heel
+    on the model's foot triangle; the head at the HAT's length along q4.
+    """
+    g = model.foot_geometry
+    hip = pose[:, :2]
+    (e1, n1), (e2, _), (e3, _), (e4, _) = (_unit(pose[:, 2 + k]) for k in range(4))
+    knee = hip - model.thigh.length_m * e3
+    ankle = knee - model.shank.length_m * e2
+    toe = ankle - g.toe_ankle_m * e1
+    heel = toe + g.heel_along_m * e1 + g.heel_perp_m * n1
+    head = hip + model.hat.length_m * e4
+    return np.stack([toe, heel, ankle, knee, hip, head], axis=1)
+
+
+def fit_leg_pose(markers_xz: np.ndarray, model: BodyModel, iterations: int = 50) -> np.ndarray:
+    """Least-squares rigid-leg pose per frame (step 2 of the module docstring), shape (M, 6), :data:`POSE_COORDINATES`.
+
+    ``markers_xz`` (M, 6, 2) in :data:`MARKER_NAMES` order, finite. Minimises
+    the summed squared distances of the toe, heel, ankle, knee and hip markers
+    to the model's (5 unknowns, 10 equations per frame) by Gauss-Newton from
+    the segment angles of the markers themselves, all frames at once; q4 is
+    the angle of hip (fitted) -> head (marker).
+    """
+    x = np.asarray(markers_xz, float)[:, _LEG_MARKERS]  # (M, 5, 2) toe heel ankle knee hip
+    g = model.foot_geometry
+    pose = np.zeros((len(x), 6))
+    pose[:, :2] = x[:, 4]
+    pose[:, 2:5] = segment_angles_from_points(np.asarray(markers_xz, float)[:, _POINT_IDX])[:, :3]
+    for _ in range(iterations):
+        residual = (leg_pose_markers(pose, model)[:, :5] - x).reshape(len(x), 10)
+        (e1, n1), (e2, n2), (e3, n3) = (_unit(pose[:, 2 + k]) for k in range(3))
+        jac = np.zeros((len(x), 5, 2, 5))  # d marker / d (hip_x, hip_z, q1, q2, q3); d e/dq = n, d n/dq = -e
+        jac[:, :, 0, 0] = jac[:, :, 1, 1] = 1.0
+        jac[:, :4, :, 4] = (-model.thigh.length_m * n3)[:, None]
+        jac[:, :3, :, 3] = (-model.shank.length_m * n2)[:, None]
+        jac[:, 0, :, 2] = -g.toe_ankle_m * n1
+        jac[:, 1, :, 2] = (g.heel_along_m - g.toe_ankle_m) * n1 - g.heel_perp_m * e1
+        jac = jac.reshape(len(x), 10, 5)
+        jt = np.swapaxes(jac, 1, 2)
+        step = np.linalg.solve(jt @ jac, -(jt @ residual[..., None]))[..., 0]
+        pose[:, :5] += step
+        if np.max(np.abs(step), initial=0.0) < 1e-12:
+            break
+    head = np.asarray(markers_xz, float)[:, _HEAD] - pose[:, :2]
+    pose[:, 5] = np.unwrap(np.arctan2(head[:, 1], head[:, 0]))
+    return pose
+
+
+def smooth_pose(t_s: np.ndarray, pose: np.ndarray, cutoff_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pose coordinates (M, k) at marker times ``t_s`` onto a :data:`RIGID_RATE_HZ` grid, then low-passed there.
+
+    Cubic spline through the fitted (unfiltered) coordinates, evaluated every
+    1 / RIGID_RATE_HZ s from ``t_s[0]``, then the project's zero-lag
+    Butterworth at ``cutoff_hz`` at that rate: the result has no content near
+    the marker rate, so any later interpolation of it (our spline of each
+    segment's centre of mass, OpenSim's spline of the coordinates) differentiates
+    the same curve. Filtering at the marker rate and then interpolating left the
+    spline's knots in the second derivatives: up to 1.6 % of the hip's peak
+    between us and OpenSim on the drop jump, instead of 0.06 %.
+
+    Returns ``(grid_s, pose_on_grid)``.
+    """
+    grid = t_s[0] + np.arange(int(np.floor((t_s[-1] - t_s[0]) * RIGID_RATE_HZ + 1e-6)) + 1) / RIGID_RATE_HZ
+    return grid, lowpass(CubicSpline(t_s, pose, axis=0)(grid), RIGID_RATE_HZ, cutoff_hz)
+
+
+def rigid_leg_markers(markers: MarkerSeries, model: BodyModel, cutoff_hz: float,
+                      max_gap_s: float) -> tuple[MarkerSeries, np.ndarray, np.ndarray]:
+    """One leg's markers moved onto the rigid leg (steps 2-3 of the module docstring).
+
+    Gaps are filled first as the v1 kinematics fill them
+    (:func:`~hop_impedance.biomech.filtering.fill_gaps`); rebuilt samples that
+    fall where a marker was in an unfilled gap are NaN again, so the analysis
+    rejects a stance there for the same reason as on the measured markers.
+
+    Returns
+    -------
+    MarkerSeries
+        The six markers on the :data:`RIGID_RATE_HZ` grid of :func:`smooth_pose`
+        (y: each marker's median y).
+    ndarray, shape (G, 6)
+        The low-passed pose (:data:`POSE_COORDINATES`) on that grid.
+    ndarray, shape (M,)
+        Per marker frame, the RMS distance (m) of the five leg markers to the fitted leg.
+    """
+    t = (markers.stamp_ns - markers.stamp_ns[0]) * 1e-9
+    filled, reliable, _ = fill_gaps(t, sagittal_markers(markers), max_gap_s)
+    if not np.all(np.isfinite(filled)):
+        bad = [MARKER_NAMES[c] for c in range(filled.shape[1]) if not np.isfinite(filled[:, c]).all()]
+        raise ValueError(f"marker(s) {bad} never visible: cannot fit the rigid leg")
+    pose = fit_leg_pose(filled, model)
+    fit_rms = np.sqrt(np.mean(np.sum((leg_pose_markers(pose, model) - filled)[:, _LEG_MARKERS] ** 2, axis=2), axis=1))
+    grid, smooth = smooth_pose(t, pose, cutoff_hz)
+    ok = np.interp(grid, t, np.all(reliable, axis=1).astype(float)) >= 1.0
+    xz = leg_pose_markers(smooth, model)
+    positions = np.empty(xz.shape[:2] + (3,))
+    positions[..., 0], positions[..., 2] = xz[..., 0], xz[..., 1]
+    positions[..., 1] = np.nanmedian(markers.positions_m[:, [markers.names.index(n) for n in MARKER_NAMES], 1], axis=0)
+    positions[~ok] = np.nan
+    stamps = markers.stamp_ns[0] + np.round(grid * 1e9).astype(np.int64)
+    return MarkerSeries(stamps, MARKER_NAMES, positions), smooth, fit_rms
 
 
 def leg_model(lumped: BodyModel) -> BodyModel:
@@ -48,7 +213,8 @@ def leg_model(lumped: BodyModel) -> BodyModel:
     return replace(lumped, **halves)
 
 
-def analyze_leg(bilateral: BilateralRecording, side: str, options: AnalysisOptions | None = None) -> RecordingAnalysis:
+def analyze_leg(bilateral: BilateralRecording, side: str, options: AnalysisOptions | None = None,
+                rigid: bool = True) -> RecordingAnalysis:
     """Stances and per-stance inverse dynamics of one leg (see the module docstring).
 
     ``options.body_model``, when given, is taken as that leg's model as is;
@@ -56,29 +222,50 @@ def analyze_leg(bilateral: BilateralRecording, side: str, options: AnalysisOptio
     the lumped analysis' rule (the calibration frames of
     :func:`~hop_impedance.biomech.analysis.calibration_markers`,
     ``options.overrides`` applied) and halved by :func:`leg_model`.
+    ``rigid``: kinematics from the rigid-segment fit (default), else from the
+    leg's markers as measured (the v1 kinematics).
     """
     options = options or AnalysisOptions()
     rec = bilateral.leg(side)
     if rec.subject is None:
         raise ValueError(f"{rec.source or 'recording'}: no /subject message; give the subject's mass and height")
-    model = options.body_model
-    if model is None and rec.markers is not None:
-        # the lumped analysis' scaling rule (same calibration frames), then halved
-        model = leg_model(body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s), options.overrides))
-    analysis = analyze_recording(rec, replace(options, body_model=model))
+    model = options.body_model or _leg_body_model(rec, options)
+    if rigid and model is not None and rec.markers is not None and len(rec.markers) >= 8:
+        rigid_markers, _, fit_rms = rigid_leg_markers(rec.markers, model, options.marker_cutoff_hz, options.max_gap_s)
+        note = (f"{side} leg: kinematics of a rigid-segment fit to the markers (median / max RMS marker distance "
+                f"{1000 * np.median(fit_rms):.1f} / {1000 * np.max(fit_rms):.1f} mm), coordinates low-passed "
+                f"at {options.marker_cutoff_hz:g} Hz")
+        analysis = _analyze_fitted(replace(rec, warnings=rec.warnings + [note]), rigid_markers, model, options)
+    else:
+        analysis = analyze_recording(rec, replace(options, body_model=model))
     for stance in analysis.stances:
         stance.hip_residual_rms_nm = float("nan")  # the HAT is not part of one leg: no top-down check
     return analysis
 
 
-def analyze_legs(bilateral: BilateralRecording, options: AnalysisOptions | None = None) -> dict[str, RecordingAnalysis]:
+def _leg_body_model(rec, options: AnalysisOptions) -> BodyModel | None:
+    """One leg's model: the lumped analysis' scaling rule (same calibration frames) on that leg's markers, halved."""
+    if rec.markers is None or not len(rec.markers):
+        return None
+    return leg_model(body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s), options.overrides))
+
+
+def _analyze_fitted(rec, markers: MarkerSeries, model: BodyModel, options: AnalysisOptions) -> RecordingAnalysis:
+    """The v1 analysis on rigid-fit markers (step 4 of the module docstring); ``options`` kept as the caller's."""
+    analysis = analyze_recording(replace(rec, markers=markers), replace(options, body_model=model, marker_cutoff_hz=PASS_THROUGH_HZ))
+    analysis.options = replace(options, body_model=model)
+    return analysis
+
+
+def analyze_legs(bilateral: BilateralRecording, options: AnalysisOptions | None = None,
+                 rigid: bool = True) -> dict[str, RecordingAnalysis]:
     """:func:`analyze_leg` for both sides, ``{"left": ..., "right": ...}``."""
     if not bilateral.is_bilateral:
         raise ValueError(
             f"{bilateral.recording.source or 'recording'}: per-leg analysis needs contract v2 "
             "(one wrench topic per plate and both legs' markers); this is a v1 recording: use the lumped analysis"
         )
-    return {side: analyze_leg(bilateral, side, options) for side in SIDES}
+    return {side: analyze_leg(bilateral, side, options, rigid) for side in SIDES}
 
 
 def fit_legs(analyses: dict[str, RecordingAnalysis], options=None) -> dict[str, list[dict]]:
@@ -133,3 +320,81 @@ def analyses_to_json(analyses: dict[str, RecordingAnalysis], add_fits=None) -> d
     subject = {k: v for k, v in doc["subject"].items() if k != "segments"}
     return {"schema": "hop_impedance.analyze_per_leg/1", "subject": subject, "recording": doc["recording"],
             "warnings": doc["warnings"], "legs": legs, "stances": stances}
+
+
+def load_share(bilateral: BilateralRecording, t_s: np.ndarray) -> np.ndarray:
+    """The left plate's share of the summed vertical force at times ``t_s`` (s since the recording's start); NaN
+    where the plates carry less than 20 N together."""
+    rec = bilateral.recording
+    ft = (rec.force.stamp_ns - rec.start_ns) * 1e-9
+    left, right = (np.interp(t_s, ft, bilateral.plates[side].force_n[:, 2]) for side in ("left", "right"))
+    total = left + right
+    return np.where(total > 20.0, left / np.where(total > 20.0, total, 1.0), np.nan)
+
+
+def mean_leg_analysis(bilateral: BilateralRecording, options: AnalysisOptions | None = None,
+                      rigid: bool = True) -> RecordingAnalysis:
+    """The lumped analysis (:func:`analyze_recording`, unchanged) of a bilateral trial on its *mean leg*.
+
+    The seed's lumped model is two identical legs on one plate; a bilateral
+    trial's two legs are not identical (on the OpenCap drop jump the left ankle
+    lands 2.9 cm ahead of the right), so the lumped analysis of the summed plate
+    is given the mean of the two legs' markers (the head is shared) instead of
+    the right leg's. ``rigid``: the mean of the two legs' rigid-fit markers
+    (:func:`rigid_leg_markers`, with the analysis' marker filter as a
+    pass-through as in :func:`analyze_leg`), so that it is compared with the
+    rigid per-leg analysis on the same kinematic footing; else the mean of the
+    measured markers, for the per-leg analysis with ``rigid=False``. The lumped
+    body model is scaled from the mean measured markers by the lumped rule.
+    """
+    options = options or AnalysisOptions()
+    rec = bilateral.recording
+    left, right = bilateral.markers("left"), bilateral.markers("right")
+    mean = MarkerSeries(right.stamp_ns, right.names, (left.positions_m + right.positions_m) / 2)
+    model = options.body_model or body_model_from_markers(rec.subject, calibration_markers(mean, options.calibration_s),
+                                                          options.overrides)
+    if not rigid:
+        return analyze_recording(replace(rec, markers=mean), replace(options, body_model=model))
+    fitted = [rigid_leg_markers(bilateral.markers(side), _leg_body_model(bilateral.leg(side), options),
+                                options.marker_cutoff_hz, options.max_gap_s)[0] for side in SIDES]
+    markers = MarkerSeries(fitted[0].stamp_ns, fitted[0].names, (fitted[0].positions_m + fitted[1].positions_m) / 2)
+    return _analyze_fitted(rec, markers, model, options)
+
+
+def sum_against_lumped(bilateral: BilateralRecording, options: AnalysisOptions | None = None, rigid: bool = True,
+                       share: tuple[float, float] = (0.4, 0.6)) -> tuple[np.ndarray, int]:
+    """Left + right against the lumped analysis where both feet share the load (issue 21).
+
+    Compared: each joint's moment of :func:`analyze_legs` (left + right, on the
+    lumped analysis' force samples) with :func:`mean_leg_analysis` (same
+    ``rigid``), over the samples of the lumped analysis' accepted stances where
+    both legs are in an accepted stance and the left plate carries between
+    ``share[0]`` and ``share[1]`` of the summed vertical force.
+
+    Returns ``(max |left + right - lumped| / lumped peak per joint (ankle, knee,
+    hip), number of samples compared)``; the peak is each joint's largest
+    |moment| over the lumped stances. Why the band: with forces F_l, F_r and the
+    two ankles ``d`` apart along x, the lumped model's ankle moment differs from
+    the sum by about ``(F_l - F_r) d / 2`` (Newton-Euler is linear in the wrench
+    and the segment masses; only the lever arms differ), which is small only
+    when the feet carry about equal loads.
+    """
+    legs = analyze_legs(bilateral, options, rigid)
+    lumped = mean_leg_analysis(bilateral, options, rigid)
+    worst, peak, n = np.zeros(3), np.zeros(3), 0
+    for stance in lumped.stances:
+        if stance.joints is None:
+            continue
+        t = stance.joints.time_s + stance.touchdown_s
+        down = np.ones(t.size, bool)
+        for analysis in legs.values():
+            down &= np.any([(t >= s.touchdown_s - 1e-9) & (t <= s.takeoff_s + 1e-9) for s in analysis.stances if s.joints is not None]
+                           or [np.zeros(t.size, bool)], axis=0)
+        left_share = load_share(bilateral, t)
+        sel = down & (left_share >= share[0]) & (left_share <= share[1])
+        m = moments_on_common_time(legs, t)
+        peak = np.maximum(peak, np.max(np.abs(stance.joints.moment_nm), axis=0))
+        if sel.any():
+            worst = np.maximum(worst, np.max(np.abs(m["left"] + m["right"] - stance.joints.moment_nm)[sel], axis=0))
+            n += int(sel.sum())
+    return worst / np.where(peak > 0, peak, np.nan), n

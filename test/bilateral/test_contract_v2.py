@@ -1,4 +1,5 @@
-"""Contract v2 (docs/contract_v2.md): both plates and both legs from the real OpenCap drop jump, MCAP round trip, v1 compatibility."""
+"""Contract v2 (docs/contract_v2.md): both plates and both legs from the real OpenCap drop jump, MCAP round trip,
+v1 compatibility."""
 
 from __future__ import annotations
 
@@ -40,7 +41,8 @@ def test_plates_sum_to_the_summed_plate_and_go_to_the_nearest_foot(bilateral):
     np.testing.assert_allclose(torque, bilateral.recording.force.torque_nm, atol=1e-9)
     assert any("ground_force_1 -> right foot" in w for w in bilateral.recording.warnings)
     assert any("ground_force_2 -> left foot" in w for w in bilateral.recording.warnings)
-    # each plate's centre of pressure lies under its own foot: in front of that leg's heel, at most to its toe tips, in x, at its ankle in y
+    # each plate's centre of pressure lies under its own foot: in front of that leg's heel, at most to its toe tips,
+    # in x, at its ankle in y
     for side in ("left", "right"):
         p, mk = bilateral.plates[side], bilateral.markers(side)
         loaded = p.force_n[:, 2] > 300
@@ -71,7 +73,8 @@ def test_mcap_round_trip_and_v1_reader(bilateral, tmp_path):
     for side in ("left", "right"):
         np.testing.assert_allclose(back.plates[side].force_n, bilateral.plates[side].force_n, atol=1e-9)
         np.testing.assert_allclose(back.plates[side].torque_nm, bilateral.plates[side].torque_nm, atol=1e-9)
-        np.testing.assert_allclose(back.markers(side).positions_m, bilateral.markers(side).positions_m, atol=1e-12, equal_nan=True)
+        np.testing.assert_allclose(back.markers(side).positions_m, bilateral.markers(side).positions_m,
+                                   atol=1e-12, equal_nan=True)
         np.testing.assert_array_equal(back.plates[side].stamp_ns, bilateral.recording.force.stamp_ns)
 
     v1 = load_recording(path)  # a v1 reader sees the v1 recording: summed plate, right leg under the v1 names
