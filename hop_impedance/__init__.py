@@ -32,7 +32,8 @@ def _version() -> str:
         root = ET.parse(package_xml).getroot()
         if root.findtext("name") == "hop_impedance" and root.findtext("version"):
             return root.findtext("version", "").strip()
-    from importlib.metadata import PackageNotFoundError, version as installed_version
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as installed_version
 
     try:
         return installed_version("hop_impedance")

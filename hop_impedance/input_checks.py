@@ -230,7 +230,8 @@ class InputChecks:
                 "force on the subject (z up), this looks like the force on the plate"))
         finite = f[np.isfinite(f)]
         if len(self._top) < UNITS_MIN_SAMPLES or (finite.size and finite.max() > self._top[0]):
-            for v in (finite if finite.size <= UNITS_MIN_SAMPLES else np.partition(finite, -UNITS_MIN_SAMPLES)[-UNITS_MIN_SAMPLES:]):
+            for v in (finite if finite.size <= UNITS_MIN_SAMPLES
+                      else np.partition(finite, -UNITS_MIN_SAMPLES)[-UNITS_MIN_SAMPLES:]):
                 if len(self._top) < UNITS_MIN_SAMPLES:
                     heapq.heappush(self._top, float(v))
                 elif v > self._top[0]:
@@ -281,8 +282,8 @@ class InputChecks:
                 "force_units", f"{FORCE_TOPIC}: force.z reaches {self._top[0]:.0f} N, {self._top[0] / bw:.0f} body "
                 "weights; not newtons?"))
 
-    def _check_rate(self, name: str, hz: float) -> None:
-        if self.cutoff_hz is None or hz > 2.0 * self.cutoff_hz:
+    def _check_rate(self, name: str, hz: float | None) -> None:
+        if hz is None or self.cutoff_hz is None or hz > 2.0 * self.cutoff_hz:
             return
         self._fail(CheckFailure(
             "rates", f"{name} samples arrive at {hz:.1f} Hz; the {self.cutoff_hz:g} Hz low-pass needs more than "

@@ -60,7 +60,7 @@ class BatchItem:
     labels: tuple[tuple[str, str], ...] = field(default=())
 
 
-def _float(value: str, column: str, where: str) -> float | None:
+def _float(value: str | None, column: str, where: str) -> float | None:
     if value is None or value.strip() == "":
         return None
     try:
@@ -128,7 +128,7 @@ def collect_items(inputs: list[str]) -> list[BatchItem]:
         else:
             found.append((p, p.stem, {}))
     seen: dict[Path, int] = {}
-    unique = []
+    unique: list[tuple[Path, str, dict]] = []
     for path, base, fields in found:
         real = path.resolve()
         if real in seen:

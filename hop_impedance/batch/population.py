@@ -99,9 +99,9 @@ def subject_records(records: list[StanceFitRecord]) -> list[StanceFitRecord]:
     for (condition, subject, joint), fits in groups.items():
         means = {name: (subject_means((subject, quantity(f, name)) for f in fits) or [math.nan])[0]
                  for name in [n for _, n in TABLE2_QUANTITIES] + ["table3_variable", "table3_constant"]}
+        statistics: dict = {n: v for n, v in means.items() if n not in TERM_NAMES}  # the fit's named statistics
         fit = JointImpedanceFit(status="solved", rejection_reason=None,
-                                coefficients={n: v for n, v in means.items() if n in TERM_NAMES},
-                                **{n: v for n, v in means.items() if n not in TERM_NAMES})
+                                coefficients={n: v for n, v in means.items() if n in TERM_NAMES}, **statistics)
         out.append(StanceFitRecord(condition, subject, joint, fit))
     return out
 

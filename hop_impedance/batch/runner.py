@@ -18,8 +18,9 @@ table are rebuilt from all recordings on every run (cheap; labels may change).
 
 Execution: ``mode="serial"`` runs :func:`analyze_item` in this process;
 otherwise one Dask task per recording on an embedded ``distributed.LocalCluster``
-(``mode="local"``: processes, one thread each, everything bound to 127.0.0.1) or on the scheduler at ``mode="tcp://HOST:PORT"``. A worker that
-dies mid-task makes the scheduler run the task again elsewhere (up to
+(``mode="local"``: processes, one thread each, everything bound to 127.0.0.1) or
+on the scheduler at ``mode="tcp://HOST:PORT"``. A worker that dies mid-task
+makes the scheduler run the task again elsewhere (up to
 ``distributed.scheduler.allowed-failures`` times, default 3); a recording that
 keeps killing workers becomes a failure line.
 """
@@ -38,7 +39,6 @@ from pathlib import Path
 
 from hop_impedance.batch.inputs import BatchItem
 from hop_impedance.batch.task import BatchOptions, Outcome, analyze_item, cache_key, file_sha256
-
 
 #: ``--group-by`` keys besides the manifest's extra columns.
 GROUP_KEYS: tuple[str, ...] = ("condition", "frequency", "subject", "recording")

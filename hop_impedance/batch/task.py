@@ -291,5 +291,5 @@ def analyze_item(item, options: BatchOptions) -> Outcome:
     return out
 
 
-__all__ = ["BATCH_FORMAT", "FIT_METRICS", "BatchOptions", "Outcome", "analyze_item", "cache_key", "file_sha256", "one_blas_thread",
-           "row_columns", "tidy_rows"]
+__all__ = ["BATCH_FORMAT", "FIT_METRICS", "BatchOptions", "Outcome", "analyze_item", "cache_key", "file_sha256",
+           "one_blas_thread", "row_columns", "tidy_rows"]

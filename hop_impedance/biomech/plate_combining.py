@@ -277,7 +277,6 @@ class PlateCombinerStage:
         Returns False after dropping a head that cannot pair (its partner
         was lost before the lock), True when every plate is locked.
         """
-        qs = self._queues
         for k, s in enumerate(self._skew):
             if s is not None:
                 continue

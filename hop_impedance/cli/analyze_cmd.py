@@ -105,7 +105,8 @@ def add_fits_to_json(doc: dict, analysis, model_terms: list[str] | None = None) 
             continue
         for name, fit in stance_fits.items():
             stance["joints"][name]["fit"] = fit_to_json(fit)
-            stance["joints"][name]["stance_model"] = {"terms": list(own[name].terms), "p_values": fit_to_json(own[name])["p_values"]}
+            stance["joints"][name]["stance_model"] = {"terms": list(own[name].terms),
+                                                      "p_values": fit_to_json(own[name])["p_values"]}
     return trial.fits
 
 
@@ -140,9 +141,10 @@ def checked_recording(path: str, flags, cutoff_hz: float, per_leg: bool = False)
 
     bilateral = load_bilateral(path) if per_leg else None
     rec = bilateral.recording if bilateral is not None else load_recording(path)
-    rec = replace(rec, subject=_subject(rec, flags, path))
+    subject = _subject(rec, flags, path)
+    rec = replace(rec, subject=subject)
     checks = InputChecks(cutoff_hz=cutoff_hz)
-    checks.set_subject(rec.subject)
+    checks.set_subject(subject)
     check_recording(checks, rec.force, rec.markers)
     return rec, bilateral
 
@@ -186,7 +188,9 @@ def run(args: argparse.Namespace) -> int:
         detector=DetectorOptions.from_settings(args.detector),
     )
     with json_output(args.json) as write_json:
-        docs, records, conditions = [], [], []
+        docs: list[dict] = []
+        records: list = []
+        conditions: list[str] = []
         terms = args.model_terms.split(",") if args.model_terms else None
         for path in args.recordings:
             rec, bilateral = checked_recording(path, args, min(options.marker_cutoff_hz, options.force_cutoff_hz),
@@ -213,6 +217,6 @@ def run(args: argparse.Namespace) -> int:
     n = len(stances)
     ok = sum(1 for s in stances if s["joints"] is not None)
     fitted = sum(1 for s in stances for j in (s["joints"] or {}).values() if (j.get("fit") or {}).get("status") == "solved")
-    fits = "" if args.no_fit else f", {fitted} joint fits"
-    print(f"hop-impedance analyze: {n} stances, {ok} with inverse dynamics{fits} -> {args.json}", file=sys.stderr)
+    fit_note = "" if args.no_fit else f", {fitted} joint fits"
+    print(f"hop-impedance analyze: {n} stances, {ok} with inverse dynamics{fit_note} -> {args.json}", file=sys.stderr)
     return 0

@@ -71,7 +71,7 @@ def resolve_defaults(namespace: argparse.Namespace) -> argparse.Namespace:
 class Parser(argparse.ArgumentParser):
     """``ArgumentParser`` whose parses come back with core defaults resolved (sub-parsers inherit the class)."""
 
-    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+    def parse_known_args(self, args=None, namespace=None):
         parsed, extras = super().parse_known_args(args, namespace)
         return resolve_defaults(parsed), extras
 

@@ -28,7 +28,11 @@ def json_output(path: str) -> Iterator[Callable[[str], None]]:
     instead, and ``write`` writes to the original stdout.
     """
     if path != "-":
-        yield lambda text: Path(path).write_text(text + "\n", encoding="utf-8")
+
+        def write_file(text: str) -> None:
+            Path(path).write_text(text + "\n", encoding="utf-8")
+
+        yield write_file
         return
     sys.stdout.flush()
     saved = os.dup(1)

@@ -2,8 +2,8 @@
 
 Each sub-command lives in its own module ``hop_impedance/cli/<name>_cmd.py``
 exposing ``register(subparsers)``, which adds its parser and sets
-``func=run``, following the conventions in :mod:`hop_impedance.cli.conventions`. Heavy imports (rclpy, scipy, rerun) happen inside ``run`` so that
-``--help`` stays fast and side-effect free.
+``func=run``, following the conventions in :mod:`hop_impedance.cli.conventions`.
+Heavy imports (rclpy, scipy, rerun) happen inside ``run`` so that ``--help`` stays fast and side-effect free.
 """
 
 from __future__ import annotations

@@ -12,7 +12,6 @@ import argparse
 
 from hop_impedance.cli.conventions import DeprecatedAlias, OptionDefault, add_rrd_argument, positional_or_alias
 
-
 CONFIG = "hop_impedance.nodes.runner:PipelineConfig"
 
 
@@ -123,7 +122,8 @@ def print_report(report, recording: str, tolerate_loss: bool = False) -> int:
         late = sum(int(report.diag(node, k, "0") or 0) for k in ("force_late_dropped", "markers_late_dropped"))
         if late:
             problem(f"warning: {node}: {late} input messages arrived later than the reorder window and were not used")
-    dups = sum(int(report.diag("/inverse_dynamics", k, "0") or 0) for k in ("force_duplicates_dropped", "markers_duplicates_dropped"))
+    dups = sum(int(report.diag("/inverse_dynamics", k, "0") or 0)
+               for k in ("force_duplicates_dropped", "markers_duplicates_dropped"))
     if dups:
         problem(f"warning: /inverse_dynamics: {dups} input messages with a repeated header.stamp dropped")
     code = 0

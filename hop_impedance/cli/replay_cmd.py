@@ -13,7 +13,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "recorded timing. DDS discovery stays on this machine unless ROS_AUTOMATIC_DISCOVERY_RANGE says otherwise.",
     )
     p.add_argument("recording", help="MCAP file or rosbag2 folder")
-    p.add_argument("--rate", type=float, default=1.0, help="speed factor (1 = real time; 0 = as fast as subscribers take it without loss) [1]")
+    p.add_argument("--rate", type=float, default=1.0,
+                   help="speed factor (1 = real time; 0 = as fast as subscribers take it without loss) [1]")
     p.add_argument("--loop", action="store_true", help="restart at the end (stamps keep increasing)")
     p.add_argument("--wait", type=float, default=5.0, help="seconds to wait for subscribers before playing [5]")
     p.add_argument("--best-effort", action="store_true", help="publish sensor topics best-effort (as live drivers do)")

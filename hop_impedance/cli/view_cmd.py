@@ -23,7 +23,8 @@ def register(subparsers) -> None:
     p.add_argument("recording", help="contract recording (MCAP)")
     add_rrd_argument(p, "write an .rrd file (open it with `.venv/bin/rerun OUT.rrd`)", old=("--save",))
     p.add_argument("--connect", metavar="URL", help="stream to a running viewer, e.g. rerun+http://127.0.0.1:9876/proxy")
-    p.add_argument("--spawn", action="store_true", help="also spawn a viewer (the default when neither --rrd nor --connect is given)")
+    p.add_argument("--spawn", action="store_true",
+                   help="also spawn a viewer (the default when neither --rrd nor --connect is given)")
     p.set_defaults(func=run)
 
 

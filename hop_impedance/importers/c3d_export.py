@@ -35,7 +35,8 @@ def plate_corners_mm(centre_mm: np.ndarray, axes: np.ndarray) -> np.ndarray:
     """Corners (3, 4) ordered so that ezc3d's plate frame (x = c0 - c1, y = c0 - c3) equals ``axes``."""
     a, b = PLATE_HALF_SIZE_MM
     x, y = axes[:, 0], axes[:, 1]
-    return np.column_stack([centre_mm + a * x + b * y, centre_mm - a * x + b * y, centre_mm - a * x - b * y, centre_mm + a * x - b * y])
+    return np.column_stack([centre_mm + a * x + b * y, centre_mm - a * x + b * y,
+                            centre_mm - a * x - b * y, centre_mm + a * x - b * y])
 
 
 def write_c3d(

@@ -82,7 +82,7 @@ def _subject_values(params, warnings: list[str]) -> tuple[float | None, float | 
 
 def _processing_parameters(params) -> dict[str, float]:
     """Numeric scalar parameters of the PROCESSING group (Vicon's subject measurements, mm), by name."""
-    group = next((params[g] for g in params.keys() if g.upper() == "PROCESSING"), {})
+    group: dict = next((params[g] for g in params.keys() if g.upper() == "PROCESSING"), {})
     out = {}
     for name, p in group.items():
         value = p.get("value", []) if isinstance(p, dict) else []

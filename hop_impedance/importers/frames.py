@@ -80,7 +80,7 @@ def rotation_to_contract(up_lab: np.ndarray, forward_lab: np.ndarray) -> np.ndar
     z = z / np.linalg.norm(z)
     f = np.asarray(forward_lab, float)
     x = f - np.dot(f, z) * z
-    if not np.all(np.isfinite(x)) or np.linalg.norm(x) < 1e-6 * max(np.linalg.norm(f), 1e-300):
+    if not np.all(np.isfinite(x)) or np.linalg.norm(x) < 1e-6 * max(float(np.linalg.norm(f)), 1e-300):
         raise ValueError(f"forward direction {f.tolist()} is vertical; it must have a horizontal part")
     x = x / np.linalg.norm(x)
     y = np.cross(z, x)

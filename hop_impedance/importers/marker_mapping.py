@@ -232,8 +232,7 @@ def resolve_labels(labels: list[str] | tuple[str, ...], mapping: MarkerMapping) 
     found: dict[str, int] = {}
     problems = []
     for name in MARKER_NAMES:
-        hits = [find_label(labels, c) for c in mapping.candidates[name]]
-        hits = [h for h in hits if h is not None]
+        hits = [h for h in (find_label(labels, c) for c in mapping.candidates[name]) if h is not None]
         if hits:
             found[name] = hits[0]
             continue

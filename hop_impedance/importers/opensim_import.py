@@ -91,7 +91,8 @@ class MotData:
 
 
 #: Spellings of a missing value seen in exported text files (lower case), besides an empty cell.
-NAN_SPELLINGS = frozenset({"nan", "-nan", "+nan", "nan(ind)", "-nan(ind)", "1.#qnan", "-1.#qnan", "1.#ind", "-1.#ind", "na", "n/a"})
+NAN_SPELLINGS = frozenset({"nan", "-nan", "+nan", "nan(ind)", "-nan(ind)", "1.#qnan", "-1.#qnan", "1.#ind", "-1.#ind",
+                           "na", "n/a"})
 
 
 def _lines(path: Path) -> list[str]:

@@ -230,7 +230,7 @@ def _resolve_axes(
         raise ValueError("the vertical axis is unknown: give it (--up +Z)")
     if forward is not None:
         fwd = parse_axis(forward)
-    elif six is not None and mapping is not None and session.marker_positions_m is not None:
+    elif six is not None and mapping is not None and labels is not None and positions is not None:
         rear, front = forward_pair_positions(labels, positions, mapping)
         fwd = detect_forward(rear, front, up_vec)
         notes.append(f"subject faces lab {_vector_text(fwd)} (detected from {len(rear)} rear->front marker pair(s))")
@@ -342,6 +342,7 @@ def session_to_recording(
     if session.marker_positions_m is not None:
         if mapping is None:
             raise ValueError("the session has markers: a marker mapping is needed (--markers NAME or YAML)")
+        assert session.marker_time_s is not None  # a session's marker positions come with their times
         marker_rate = sampling_rate_hz(session.marker_time_s, "markers")
         if (w := _rate_warning(marker_rate, CONTRACT_MARKER_RATE_HZ, "marker")) is not None:
             warnings.append(w)
@@ -374,6 +375,7 @@ def session_to_recording(
 
     markers = None
     if six is not None:
+        assert mapping is not None and session.marker_time_s is not None  # six is made only from both (above)
         six_c = to_contract(six, rotation, origin)
         for name in mapping.lower_to_sole:
             drop = lower_to_sole(six_c, name)

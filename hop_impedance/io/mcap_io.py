@@ -17,9 +17,10 @@ from __future__ import annotations
 
 import time
 from collections import Counter
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Iterator
+from typing import Any
 
 from mcap.reader import NonSeekingReader, SeekingReader
 from mcap.writer import CompressionType
@@ -124,6 +125,7 @@ class MessageStream:
 
     def __iter__(self) -> Iterator[DecodedMessage]:
         with open(self.path, "rb") as fh:
+            reader: SeekingReader | NonSeekingReader
             try:
                 reader = SeekingReader(fh, decoder_factories=[DecoderFactory()])
                 summary = reader.get_summary()
@@ -148,12 +150,13 @@ class MessageStream:
                 self.count += 1
                 self.first_ns = message.log_time if self.first_ns is None else self.first_ns
                 self.last_ns = message.log_time
-                yield DecodedMessage(channel.topic, schema.name if schema else "", message.log_time, message.publish_time, decoded)
+                yield DecodedMessage(channel.topic, schema.name if schema else "", message.log_time, message.publish_time,
+                                     decoded)
         except GeneratorExit:
             raise
         except Exception as exc:  # noqa: BLE001 - damage can surface as any parser/decompressor error
             where = (f"after t={(self.last_ns - self.first_ns) * 1e-9:.3f} s of the recording"
-                     if self.last_ns is not None else "before the first message")
+                     if self.last_ns is not None and self.first_ns is not None else "before the first message")
             self.stopped_at = f"truncated or corrupt: read {self.count} messages, stopped {where} ({type(exc).__name__})"
 
 
@@ -242,11 +245,13 @@ class McapWriter:
         """Encode and write one message (fields as a dict or attributes)."""
         self.write_serialized(topic, type_name, self._encoder(type_name)(message), log_time_ns, publish_time_ns)
 
-    def write_serialized(self, topic: str, type_name: str, data: bytes, log_time_ns: int, publish_time_ns: int | None = None) -> None:
+    def write_serialized(self, topic: str, type_name: str, data: bytes, log_time_ns: int,
+                         publish_time_ns: int | None = None) -> None:
         """Write one message already serialised as CDR (e.g. by ``rclpy.serialization``)."""
         cid = self._channel(topic, type_name)
         t = int(log_time_ns)
-        if self._chunk_lo is not None and max(self._chunk_hi, t) - min(self._chunk_lo, t) > self._span_ns:
+        if self._chunk_lo is not None and self._chunk_hi is not None and \
+                max(self._chunk_hi, t) - min(self._chunk_lo, t) > self._span_ns:
             self.flush()
         self._chunk_lo = t if self._chunk_lo is None else min(self._chunk_lo, t)
         self._chunk_hi = t if self._chunk_hi is None else max(self._chunk_hi, t)
@@ -277,7 +282,7 @@ class McapWriter:
             self._fh.close()
             self._closed = True
 
-    def __enter__(self) -> "McapWriter":
+    def __enter__(self) -> McapWriter:
         return self
 
     def __exit__(self, *exc: Any) -> None:

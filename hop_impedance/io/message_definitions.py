@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 import re
 import sys
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 _REPO_MSG_DIR = Path(__file__).resolve().parents[2] / "msg_defs" / "msg"
@@ -52,7 +52,7 @@ def _search_dirs(package: str) -> list[Path]:
     return dirs
 
 
-@lru_cache(maxsize=None)
+@cache
 def msg_file_text(type_name: str) -> str:
     """The ``.msg`` text of one type (comments kept, as rosbag2 does)."""
     package, name = normalize_type_name(type_name)
@@ -86,7 +86,7 @@ def _field_types(text: str, package: str) -> list[str]:
     return found
 
 
-@lru_cache(maxsize=None)
+@cache
 def full_definition(type_name: str) -> str:
     """rosbag2-style ``ros2msg`` schema text: the type plus all dependencies, depth first."""
     package, name = normalize_type_name(type_name)

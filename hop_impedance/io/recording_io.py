@@ -55,7 +55,8 @@ def _count_gaps(stamps: np.ndarray, label: str, warnings: list[str]) -> None:
     big = dt > 1.5 * period
     if big.any():
         missing = int(np.sum(np.round(dt[big] / period) - 1))
-        warnings.append(f"{label}: {missing} sample(s) missing in {int(big.sum())} gap(s) (nominal period {period * 1e-6:.2f} ms)")
+        warnings.append(f"{label}: {missing} sample(s) missing in {int(big.sum())} gap(s) "
+                        f"(nominal period {period * 1e-6:.2f} ms)")
 
 
 def load_recording(path: str | Path, marker_map: dict[str, str] | None = None, require_markers: bool = False) -> Recording:
@@ -175,7 +176,8 @@ def write_recording_messages(writer: McapWriter, recording: Recording) -> None:
         writer.write(
             SUBJECT_TOPIC,
             SUBJECT_TYPE,
-            {"header": _header(start, LAB_FRAME_ID), "subject_id": s.subject_id, "body_mass": s.body_mass_kg, "body_height": s.body_height_m},
+            {"header": _header(start, LAB_FRAME_ID), "subject_id": s.subject_id, "body_mass": s.body_mass_kg,
+             "body_height": s.body_height_m},
             start,
         )
     events = [(int(t), 0, i) for i, t in enumerate(recording.force.stamp_ns)]
@@ -194,8 +196,10 @@ def write_recording_messages(writer: McapWriter, recording: Recording) -> None:
             writer.write(FORCE_TOPIC, WRENCH_TYPE, msg, t)
         else:
             mk = recording.markers
+            assert mk is not None  # marker events are only made when there are markers (above)
             pts = [{"x": float(p[0]), "y": float(p[1]), "z": float(p[2])} for p in mk.positions_m[i]]
-            writer.write(MARKER_TOPIC, MARKER_TYPE, {"header": _header(t, LAB_FRAME_ID), "names": list(mk.names), "positions": pts}, t)
+            writer.write(MARKER_TOPIC, MARKER_TYPE,
+                         {"header": _header(t, LAB_FRAME_ID), "names": list(mk.names), "positions": pts}, t)
 
 
 def _header(stamp_ns: int, frame_id: str) -> dict:

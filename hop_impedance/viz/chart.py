@@ -63,7 +63,7 @@ def padded_range(values: np.ndarray, pad: float = 0.08, include_zero: bool = Fal
 
 
 def _ticks(lo: float, hi: float) -> np.ndarray:
-    ticks = MaxNLocator(nbins=4).tick_values(lo, hi)
+    ticks = np.asarray(MaxNLocator(nbins=4).tick_values(lo, hi), float)
     return ticks[(ticks >= lo) & (ticks <= hi)]
 
 
@@ -79,8 +79,8 @@ def log_chart_frame(rec: rr.RecordingStream, path: str, chart: Chart, title: str
     title : str
         Shown above the box.
     """
-    l, t, w, h = chart.left, chart.top, chart.width, chart.height
-    box = [[l, t], [l + w, t], [l + w, t + h], [l, t + h], [l, t]]
+    x0, t, w, h = chart.left, chart.top, chart.width, chart.height
+    box = [[x0, t], [x0 + w, t], [x0 + w, t + h], [x0, t + h], [x0, t]]
     strips = [box]
     (y0, y1) = chart.y_range
     if y0 < 0.0 < y1:
@@ -91,7 +91,7 @@ def log_chart_frame(rec: rr.RecordingStream, path: str, chart: Chart, title: str
     x_pts = chart.to_view(xt, np.full(xt.shape, y0)) + [0.0, 4.0]
     y_pts = chart.to_view(np.full(yt.shape, chart.x_range[0]), yt) - [6.0, 0.0]
     labels = [f"{v:g}" for v in xt] + [f"{v:g}" for v in yt]
-    title_pts = [[l + w / 2, t + h + 10.0], [l - 4.0, t - 6.0], [l + w / 2, t - 16.0]]
+    title_pts = [[x0 + w / 2, t + h + 10.0], [x0 - 4.0, t - 6.0], [x0 + w / 2, t - 16.0]]
     rec.log(
         f"{path}/labels",
         rr.Points2D(

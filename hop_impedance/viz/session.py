@@ -48,10 +48,10 @@ class SessionSummary:
 
 def stance_views(analysis, fits: list[dict] | None) -> list[StanceView]:
     """One :class:`StanceView` per analysed stance (fits: one ``{joint: fit}`` per stance, or None)."""
-    fits = fits if fits is not None else [None] * len(analysis.stances)
-    if len(fits) != len(analysis.stances):
-        raise ValueError(f"fits: {len(fits)} entries for {len(analysis.stances)} stances")
-    return [stance_view_from_result(s, f) for s, f in zip(analysis.stances, fits)]
+    per_stance: list[dict | None] = list(fits) if fits is not None else [None] * len(analysis.stances)
+    if len(per_stance) != len(analysis.stances):
+        raise ValueError(f"fits: {len(per_stance)} entries for {len(analysis.stances)} stances")
+    return [stance_view_from_result(s, f) for s, f in zip(analysis.stances, per_stance)]
 
 
 def charts_for(views: list[StanceView]) -> dict[str, tuple[Chart, Chart]]:
@@ -61,9 +61,12 @@ def charts_for(views: list[StanceView]) -> dict[str, tuple[Chart, Chart]]:
         fitted = [v.joints[joint] for v in views if joint in v.joints and v.joints[joint].ok]
         if not fitted:
             continue
-        cat = lambda name: np.concatenate([getattr(j, name) for j in fitted])  # noqa: E731
+        def cat(name: str, fitted: list = fitted) -> np.ndarray:
+            return np.concatenate([getattr(j, name) for j in fitted])
+
         ranges[0][joint] = padded_range(np.degrees(cat("angle_rad")))
-        ranges[1][joint] = padded_range(np.concatenate([cat("moment_nm"), cat("moment_fit_nm"), cat("moment_constant_nm")]), include_zero=True)
+        ranges[1][joint] = padded_range(np.concatenate([cat("moment_nm"), cat("moment_fit_nm"), cat("moment_constant_nm")]),
+                                        include_zero=True)
         ranges[2][joint] = padded_range(cat("stiffness_nm_per_rad"), include_zero=True)
     return joint_charts(*ranges)
 
@@ -118,7 +121,8 @@ def log_session(rec: rr.RecordingStream, recording: Recording, analysis, fits: l
         log_stance_interval(rec, stance.touchdown_s, stance.takeoff_s)
         if stance.joints is not None:
             js = stance.joints
-            log_joint_series(rec, stance.touchdown_s + js.time_s, js.angle_rad, js.angular_velocity_rad_s, js.moment_nm, js.power_w)
+            log_joint_series(rec, stance.touchdown_s + js.time_s, js.angle_rad, js.angular_velocity_rad_s, js.moment_nm,
+                             js.power_w)
         log_stance(rec, view, charts)
     rejected = {v.index: v.rejection_reason for v in views if v.rejection_reason}
     fitted = sum(1 for v in views if not v.rejection_reason and any(j.ok for j in v.joints.values()))
@@ -173,7 +177,7 @@ def open_sinks(
     ValueError
         When no sink is asked for.
     """
-    sinks = []
+    sinks: list = []  # rr.GrpcSink and rr.FileSink
     if spawn:
         ensure_analytics_disabled()
         rr.spawn(port=port, connect=False, hide_welcome_screen=True)

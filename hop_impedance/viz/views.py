@@ -40,8 +40,10 @@ def log_static_styles(rec: rr.RecordingStream) -> None:
         color = S.JOINT_COLORS[joint]
         for path in (f"{S.ANGLE}/{joint}", f"{S.VELOCITY}/{joint}", f"{S.POWER}/{joint}", f"{S.STIFFNESS}/{joint}"):
             rec.log(path, rr.SeriesLines(colors=color, names=joint, widths=1.5), static=True)
-        rec.log(S.moment_path(joint, "inverse_dynamics"), rr.SeriesLines(colors=color, names=f"{joint} ID", widths=2.0), static=True)
-        rec.log(S.moment_path(joint, "variable_fit"), rr.SeriesLines(colors=S.FIT_COLOR, names=f"{joint} fit", widths=1.0), static=True)
+        rec.log(S.moment_path(joint, "inverse_dynamics"), rr.SeriesLines(colors=color, names=f"{joint} ID", widths=2.0),
+                static=True)
+        rec.log(S.moment_path(joint, "variable_fit"), rr.SeriesLines(colors=S.FIT_COLOR, names=f"{joint} fit", widths=1.0),
+                static=True)
         for coef in ("k0", "k1"):
             path = f"{S.TREND}/{coef}/{joint}"
             rec.log(path, rr.SeriesLines(colors=color, names=joint, widths=1.0), static=True)
@@ -167,12 +169,14 @@ def cop_x_from_wrench(force_n: np.ndarray, torque_nm: np.ndarray, min_fz_n: floa
 
 def log_stance_event(rec: rr.RecordingStream, t_s: float, touchdown: bool) -> None:
     """One stance mark on the GRF plot: the 0/1 step series goes to 1 at a touchdown, 0 at a take-off."""
-    rec.send_columns(S.IN_STANCE, indexes=[_time(np.array([t_s]))], columns=rr.Scalars.columns(scalars=[1.0 if touchdown else 0.0]))
+    rec.send_columns(S.IN_STANCE, indexes=[_time(np.array([t_s]))],
+                     columns=rr.Scalars.columns(scalars=[1.0 if touchdown else 0.0]))
 
 
 def log_stance_interval(rec: rr.RecordingStream, touchdown_s: float, takeoff_s: float) -> None:
     """Mark a stance on the GRF plot (touchdown and take-off, s)."""
-    rec.send_columns(S.IN_STANCE, indexes=[_time(np.array([touchdown_s, takeoff_s]))], columns=rr.Scalars.columns(scalars=[1.0, 0.0]))
+    rec.send_columns(S.IN_STANCE, indexes=[_time(np.array([touchdown_s, takeoff_s]))],
+                     columns=rr.Scalars.columns(scalars=[1.0, 0.0]))
 
 
 def log_joint_series(
@@ -293,15 +297,18 @@ def log_stance(rec: rr.RecordingStream, view: StanceView, charts: dict[str, tupl
 def _log_joint_fit(rec, view: StanceView, joint: str, j, charts: tuple[Chart, Chart]) -> None:
     t = view.touchdown_s + np.append(j.time_s, j.time_s[-1] + 1e-3)
     gap = np.full(1, np.nan)
-    rec.send_columns(S.moment_path(joint, "variable_fit"), indexes=[_time(t)], columns=rr.Scalars.columns(scalars=np.append(j.moment_fit_nm, gap)))
-    rec.send_columns(f"{S.STIFFNESS}/{joint}", indexes=[_time(t)], columns=rr.Scalars.columns(scalars=np.append(j.stiffness_nm_per_rad, gap)))
+    rec.send_columns(S.moment_path(joint, "variable_fit"), indexes=[_time(t)],
+                     columns=rr.Scalars.columns(scalars=np.append(j.moment_fit_nm, gap)))
+    rec.send_columns(f"{S.STIFFNESS}/{joint}", indexes=[_time(t)],
+                     columns=rr.Scalars.columns(scalars=np.append(j.stiffness_nm_per_rad, gap)))
     loop, kc = charts
     deg = np.degrees(j.angle_rad)
     color = S.JOINT_COLORS[joint]
     measured = loop.to_view(deg, j.moment_nm)
     _strip(rec, S.chart_path(joint, "loop", "current", "measured"), measured, color, 2.0, 3.0)
     _strip(rec, S.chart_path(joint, "loop", "current", "variable_fit"), loop.to_view(deg, j.moment_fit_nm), S.FIT_COLOR, 1.0, 4.0)
-    _strip(rec, S.chart_path(joint, "loop", "current", "constant_fit"), loop.to_view(deg, j.moment_constant_nm), S.CONSTANT_COLOR, 1.0, 4.0)
+    _strip(rec, S.chart_path(joint, "loop", "current", "constant_fit"), loop.to_view(deg, j.moment_constant_nm),
+           S.CONSTANT_COLOR, 1.0, 4.0)
     k_rho = kc.to_view(deg, j.stiffness_nm_per_rad)
     _strip(rec, S.chart_path(joint, "k_rho", "current"), k_rho, color, 2.0, 3.0)
     _strip(rec, S.chart_path(joint, "loop", "history", f"stance_{view.index:03d}"), measured, S.HISTORY_COLOR, 0.5, 2.0)
