@@ -69,7 +69,7 @@ from hop_impedance.biomech.stages import WITHDRAWN, equivalent_linear_impedance
 from hop_impedance.impedance.plausibility import PlausibilityBounds, controller_damping, controller_rejection
 from hop_impedance.impedance.pooling import StancePool
 from hop_impedance.input_checks import INPUT_CHECK_PREFIX
-from hop_impedance.impedance.recording_fits import SEED_TERMS, StructureSelector, default_fit_options
+from hop_impedance.impedance.recording_fits import SEED_TERMS, StructureSelector, default_fit_options, fit_stance_joints
 from hop_impedance.impedance.stance_fit import JointImpedanceFit
 from hop_impedance.nodes.common import (
     CONTROLLER_TOPIC, PROFILE_TOPIC, STANCE_KINETICS_TOPIC, SUMMARY_TOPIC, Diagnostics, declare, percentile_ms,
@@ -114,6 +114,7 @@ class ImpedanceEstimatorNode(Node):
             self.options, None if warmup > 0 else terms, max(warmup, 1),
             "given (model_terms_<joint>; default: the seed's reduced model, its Eq. 10, fitted to every stance so "
             "the coefficients mean the same in each; model_warmup_stances N chooses from the first N stances)")
+        self._stance_solvers: dict = {}  # OSQP workspaces of the per-stance reductions (warm start)
         self.fit_s: list[float] = []
         self.latency_s: list[float] = []
         self.stances_in = 0
@@ -161,7 +162,7 @@ class ImpedanceEstimatorNode(Node):
         self.stances_in += 1
         stance = stance_from_message(msg)
         was_fixed = self.selector.fixed
-        fits, _ = self.selector.fit(stance)
+        fits, stance_fits = self.selector.fit(stance)
         if self.selector.fixed and not was_fixed:
             self.get_logger().info("model structure: " + "; ".join(
                 f"{j} {' '.join(s.terms)} ({s.reason})" for j, s in self.selector.structures.items()))
@@ -169,13 +170,7 @@ class ImpedanceEstimatorNode(Node):
         latency = (time.time_ns() - msg.takeoff_received_ns) * 1e-9 if msg.takeoff_received_ns else math.nan
         if math.isfinite(latency) and not withdrawn:
             self.latency_s.append(latency)
-        for j, name in enumerate(JOINT_NAMES):
-            self.pub_profile.publish(profile_message(msg, name, fits[name], latency))
-            if fits[name].ok:
-                self.accepted[j] += 1
-            else:
-                self.rejected[j] += 1
-        self.pub_summary.publish(summary_message(msg, fits))
+        # the controller first (its latency is the one that matters), then the per-stance reports
         before = (f"stance touched down before /subject changed to {self.feed.subject_id!r}"
                   if touchdown_ns < self.subject_since_ns else None)
         subject_mass = self.subject_key[1] if self.subject_key is not None else None
@@ -186,6 +181,15 @@ class ImpedanceEstimatorNode(Node):
                 self.valid_since_ns[j] = msg.takeoff_received_ns or time.time_ns()
         self._expire(publish=False)  # a stance that arrives already too old is not valid
         self.pub_feed.publish(self.feed)
+        if stance_fits is None:  # structure fixed: this stance's own diagnostics and F-tests, reported beside it
+            stance_fits = fit_stance_joints(stance, self.options, self._stance_solvers)
+        for j, name in enumerate(JOINT_NAMES):
+            self.pub_profile.publish(profile_message(msg, name, fits[name], latency, stance_fits[name]))
+            if fits[name].ok:
+                self.accepted[j] += 1
+            else:
+                self.rejected[j] += 1
+        self.pub_summary.publish(summary_message(msg, fits))
         for j, name in enumerate(JOINT_NAMES):
             self.valid[j] += reasons[name] is None
             if reasons[name] is not None:
@@ -260,8 +264,13 @@ def _f(x) -> float:
     return math.nan if x is None else float(x)
 
 
-def profile_message(stance: StanceKinetics, joint: str, fit: JointImpedanceFit, latency_s: float) -> ImpedanceProfile:
-    """One joint's fit as an ``ImpedanceProfile`` (rejection: ``accepted`` false with the reason)."""
+def profile_message(stance: StanceKinetics, joint: str, fit: JointImpedanceFit, latency_s: float,
+                    stance_fit: JointImpedanceFit | None = None) -> ImpedanceProfile:
+    """One joint's fit as an ``ImpedanceProfile`` (rejection: ``accepted`` false with the reason).
+
+    ``stance_fit``: the same stance fitted with its own reduction (per-stance F-tests); its kept terms
+    go to ``stance_terms``.
+    """
     msg = ImpedanceProfile(stance_index=stance.stance_index, joint=joint, accepted=fit.ok,
                            rejection_reason=fit.rejection_reason or "", solver_status=fit.status)
     msg.header = stance.header
@@ -272,6 +281,8 @@ def profile_message(stance: StanceKinetics, joint: str, fit: JointImpedanceFit, 
         msg.coefficients = [_f(fit.coefficients.get(t)) for t in fit.terms]
         msg.std_errors = [_f(fit.std_errors.get(t)) for t in fit.terms]
         msg.p_values = [_f(fit.p_values.get(t)) for t in fit.terms]
+    if stance_fit is not None and stance_fit.reduction is not None:
+        msg.stance_terms = list(stance_fit.terms)
     msg.rho0_rad, msg.omega0_rad_s = _f(fit.rho0), _f(fit.omega0)
     msg.moment0_nm = float(fit.moment_nm[0]) if fit.moment_nm.size else math.nan
     if fit.ok:

@@ -65,6 +65,8 @@ def test_separate_processes_match_offline_analyze(tmp_path, offline):
             assert list(p.terms) == list(fit["terms"])
             off = np.array([fit["coefficients"][t] for t in fit["terms"]])
             np.testing.assert_allclose(np.array(p.coefficients), off, rtol=2e-3, atol=0.05)
+            # the per-stance F-tests, reported beside the given structure as analyze reports them
+            assert list(p.stance_terms) == list(s_off["joints"][joint]["stance_model"]["terms"]), (joint, s_off["index"])
     # no loss with progress flow control; the recorder wrote inputs and outputs
     from hop_impedance.io.mcap_io import summarize
 
