@@ -207,9 +207,16 @@ def load_bilateral(path: str | Path, **options) -> BilateralRecording:
     return BilateralRecording(rec, plates, left)
 
 
+def leg_marker_names(side: str) -> tuple[str, ...]:
+    """The names on a v2 ``/mocap/markers`` message of one leg's six markers, in :data:`MARKER_NAMES` order
+    (the right leg keeps the v1 names, the left has ``_l``; ``head`` is shared)."""
+    _check_side(side)
+    return MARKER_NAMES if side == "right" else (*LEFT_MARKER_NAMES, "head")
+
+
 def _left_columns(names: list[str]) -> list[int] | None:
     """Columns of toe_l, heel_l, ankle_l, knee_l, hip_l, head (v1 order) in a message's names; None if any is missing."""
-    wanted = [*LEFT_MARKER_NAMES[:5], "head"]
+    wanted = leg_marker_names("left")
     if not all(n in names for n in wanted):
         return None
     return [names.index(n) for n in wanted]

@@ -73,7 +73,7 @@ from hop_impedance.biomech.analysis import AnalysisOptions, RecordingAnalysis, a
 from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.biomech.filtering import fill_gaps, lowpass, sampling_rate_hz
 from hop_impedance.biomech.kinematics import _POINT_IDX, body_model_from_markers, sagittal_markers, segment_angles_from_points
-from hop_impedance.recording import MARKER_NAMES, MarkerSeries
+from hop_impedance.recording import MARKER_NAMES, MarkerSeries, Subject
 
 #: The segments of one leg (the HAT belongs to neither).
 LEG_SEGMENTS = ("foot", "shank", "thigh")
@@ -211,6 +211,19 @@ def leg_model(lumped: BodyModel) -> BodyModel:
     halves = {name: replace(getattr(lumped, name), mass_kg=getattr(lumped, name).mass_kg / 2,
                             inertia_kgm2=getattr(lumped, name).inertia_kgm2 / 2) for name in LEG_SEGMENTS}
     return replace(lumped, **halves)
+
+
+def leg_subject(subject: Subject) -> Subject:
+    """The subject as one leg's segment tables see it: half the body mass.
+
+    de Leva's segment masses and inertias are proportional to the body mass, so
+    a model scaled for this subject from one leg's markers has exactly
+    :func:`leg_model`'s foot, shank and thigh (tested); its HAT is halved too,
+    which no leg uses. For the live ``inverse_dynamics`` node with ``side``
+    left or right, whose stage scales its model itself; stance detection there
+    keeps the whole body weight, as :func:`analyze_leg` does.
+    """
+    return replace(subject, body_mass_kg=subject.body_mass_kg / 2)
 
 
 def analyze_leg(bilateral: BilateralRecording, side: str, options: AnalysisOptions | None = None,

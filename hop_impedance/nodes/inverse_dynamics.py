@@ -32,6 +32,13 @@ Thin adapter around :class:`hop_impedance.biomech.stages.StanceAnalysisStage`:
 - Stances are found by the same detector stage as ``stance_detector``'s, with
   the same parameters (:func:`stance_detector.declare_detector_options`) and
   body weight, so the analysed stances are the published ``/stance/events``.
+- ``side`` (issue 21): ``lumped`` (default) analyses the summed plate with the
+  v1 markers and both legs' segments; ``left`` / ``right`` analyses one leg of
+  a contract v2 stream (docs/contract_v2.md): that foot's plate
+  ``/force_plate/<side>/wrench``, that leg's markers (``_l`` names for the
+  left), one leg's segments (:func:`hop_impedance.biomech.per_leg.leg_subject`),
+  no HAT residual; the same stances and moments as ``analyze_legs(...,
+  rigid=False)`` (the offline rigid-segment fit is not live).
 - ``low_latency`` selects the stage's low-latency mode (window ends
   ``post_pad_s`` after the provisional take-off); a withdrawn take-off is
   published as a stance rejected with :data:`stages.WITHDRAWN`, so the
@@ -48,7 +55,9 @@ from geometry_msgs.msg import WrenchStamped
 from rclpy.node import Node
 from std_msgs.msg import Header
 
+from hop_impedance.bilateral import PLATE_TOPICS, SIDES, leg_marker_names
 from hop_impedance.biomech.analysis import AnalysisOptions, StanceResult
+from hop_impedance.biomech.per_leg import leg_subject
 from hop_impedance.biomech.stages import StanceAnalysisStage
 from hop_impedance.nodes.common import (
     END_TOPIC, JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC, Diagnostics, InputTracker, ProgressReporter,
@@ -68,6 +77,11 @@ class InverseDynamicsNode(Node):
         reliable, reorder_s, period, diag = declare_stream_parameters(self, "the stage")
         self.publish_frames = declare(self, "publish_frames", True, "publish per-frame JointKinetics of each analysed stance")
         self.sex = declare(self, "sex", "female", "de Leva table: female or male (not in SubjectInfo)")
+        self.side = declare(self, "side", "lumped", "lumped (summed plate, both legs) or left / right (one leg of a v2 stream)")
+        if self.side not in ("lumped", *SIDES):
+            raise ValueError(f"parameter side must be lumped, left or right, got {self.side!r}")
+        self.force_topic = FORCE_TOPIC if self.side == "lumped" else PLATE_TOPICS[self.side]
+        self.marker_names = MARKER_NAMES if self.side == "lumped" else leg_marker_names(self.side)
         low_latency = declare(self, "low_latency", False, "analyse at take-off + post_pad_s instead of at the next touchdown")
         post_pad = declare(self, "post_pad_s", 0.05, "low-latency mode: data used after take-off (s)")
         defaults = AnalysisOptions()
@@ -90,18 +104,18 @@ class InverseDynamicsNode(Node):
         self.pending_markers: list[tuple[int, object]] = []
         self.arrivals = np.zeros((0, 2), np.int64)  # (stamp ns, wall arrival ns) of recent force samples
         self._arrivals_new: list[tuple[int, int]] = []
-        self.trackers = {FORCE_TOPIC: InputTracker(FORCE_TOPIC), MARKER_TOPIC: InputTracker(MARKER_TOPIC)}
+        self.trackers = {self.force_topic: InputTracker(self.force_topic), MARKER_TOPIC: InputTracker(MARKER_TOPIC)}
         self.stances_out = 0
         self.rejected = 0
         # losses outside reported stances (a stance whose samples all vanished is never detected)
-        self.sorted_force = InputTracker(FORCE_TOPIC)  # the released (stamp-sorted) force stream
+        self.sorted_force = InputTracker(self.force_topic)  # the released (stamp-sorted) force stream
         self.lost_between_stances = 0
         self.lost_after_last = 0
         self.analysis_s: list[float] = []
         self.pub_stance = self.create_publisher(StanceKinetics, STANCE_KINETICS_TOPIC, history_qos())  # late joiners
         self.pub_frames = self.create_publisher(JointKinetics, JOINT_KINETICS_TOPIC, result_qos(2000))
         self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
-        self.create_subscription(WrenchStamped, FORCE_TOPIC, self._on_wrench, input_qos(reliable), raw=True)
+        self.create_subscription(WrenchStamped, self.force_topic, self._on_wrench, input_qos(reliable), raw=True)
         self.create_subscription(MarkerArray, MARKER_TOPIC, self._on_markers, input_qos(reliable))
         self.create_subscription(Header, END_TOPIC, self._on_end, latched_qos())
         self.progress = ProgressReporter(self, self.trackers)
@@ -119,7 +133,7 @@ class InverseDynamicsNode(Node):
     def _on_wrench(self, cdr: bytes) -> None:
         """Raw ``WrenchStamped`` (parsed by :func:`common.wrench_from_cdr`, ~30x cheaper than deserialising)."""
         ns, (fx, _, fz, _, my, _) = wrench_from_cdr(cdr)
-        self.trackers[FORCE_TOPIC].note(ns)
+        self.trackers[self.force_topic].note(ns)
         if self.force_buf.add(ns, (fx, fz, -my)):  # sagittal [Fx, Fz, Mo] (force_plate.sagittal_wrench)
             self._arrivals_new.append((ns, time.time_ns()))
 
@@ -129,7 +143,7 @@ class InverseDynamicsNode(Node):
         names = list(msg.names)
         self.guard.marker_frame(ns, names, msg.positions)
         xz = np.full((len(MARKER_NAMES), 2), np.nan)
-        for i, name in enumerate(MARKER_NAMES):
+        for i, name in enumerate(self.marker_names):
             if name in names:
                 p = msg.positions[names.index(name)]
                 xz[i] = (p.x, p.z)
@@ -219,7 +233,7 @@ class InverseDynamicsNode(Node):
         self._notes_logged = len(self.stage.notes)
 
     def _note_processed(self, forces, markers) -> None:
-        for topic, items in ((FORCE_TOPIC, forces), (MARKER_TOPIC, markers)):
+        for topic, items in ((self.force_topic, forces), (MARKER_TOPIC, markers)):
             if items:
                 self.progress.processed_ns[topic] = int(items[-1][0])
         self.progress.stances_out = self.stances_out
@@ -235,7 +249,8 @@ class InverseDynamicsNode(Node):
             mass = self.subject.body_mass_kg if self.subject is not None else math.nan
             self.stage = StanceAnalysisStage(None, mass, self.options, self.post_pad_s)
         elif self.subject is not None:
-            self.stage = StanceAnalysisStage(None, self.subject.body_mass_kg, self.options, self.post_pad_s, subject=self.subject)
+            model_subject = self.subject if self.side == "lumped" else leg_subject(self.subject)  # one leg's segments
+            self.stage = StanceAnalysisStage(None, self.subject.body_mass_kg, self.options, self.post_pad_s, subject=model_subject)
 
     def _bound_pending(self, max_s: float = 30.0) -> None:
         """Without a subject, keep at most ``max_s`` of data (older samples are counted as lost)."""
@@ -267,6 +282,8 @@ class InverseDynamicsNode(Node):
     def _publish(self, res: StanceResult) -> None:
         if self.guard.failure is not None:
             res.rejection_reason, res.joints = self.guard.reason(res.rejection_reason), None
+        if self.side != "lumped":
+            res.hip_residual_rms_nm = math.nan  # the HAT is not part of one leg: no top-down check
         msg = stance_message(res, self.t0_ns)
         msg.takeoff_received_ns = self._takeoff_arrival_ns(stamp_ns(msg.takeoff_stamp))
         msg.force_samples_lost_before = self.sorted_force.take_lost_before(stamp_ns(msg.touchdown_stamp))
@@ -282,12 +299,12 @@ class InverseDynamicsNode(Node):
     def _diag_values(self) -> dict:
         out = {}
         for topic, t in self.trackers.items():
-            name = "force" if topic == FORCE_TOPIC else "markers"
+            name = "force" if topic == self.force_topic else "markers"
             out |= {f"{name}_received": t.received, f"{name}_rate_hz": t.rate_hz, f"{name}_lost": t.lost,
                     f"{name}_out_of_order": t.late}
         out["force_late_dropped"] = self.force_buf.dropped
         out["markers_late_dropped"] = self.marker_buf.dropped
-        f, m = (self.trackers[k].newest_ns for k in (FORCE_TOPIC, MARKER_TOPIC))
+        f, m = (self.trackers[k].newest_ns for k in (self.force_topic, MARKER_TOPIC))
         out["sync_residual_s"] = (f - m) * 1e-9 if f is not None and m is not None else math.nan
         out["force_lost_between_stances"] = self.lost_between_stances
         out["force_lost_after_last_stance"] = self.lost_after_last

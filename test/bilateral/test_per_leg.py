@@ -122,3 +122,18 @@ def test_single_leg_landing(bilateral):
     v1 = _contact(analyze_recording(one.leg("right"), AnalysisOptions(body_model=legs["right"].model)))
     np.testing.assert_allclose(measured.joints.moment_nm, v1.joints.moment_nm, atol=1e-9)
     assert isinstance(one.plates["left"], ForcePlateSeries) and not np.any(one.plates["left"].force_n)
+
+
+def test_leg_subject_scales_the_leg_model(bilateral):
+    """The live node scales one leg's model for ``leg_subject`` (half the mass) since its stage scales the model
+    itself; foot, shank and thigh must be exactly ``leg_model``'s (de Leva masses and inertias are proportional to
+    the body mass)."""
+    from hop_impedance.biomech.kinematics import body_model_from_markers
+    from hop_impedance.biomech.per_leg import leg_model, leg_subject
+
+    subject, markers = bilateral.recording.subject, bilateral.markers("left")
+    half = body_model_from_markers(leg_subject(subject), markers)
+    halved = leg_model(body_model_from_markers(subject, markers))
+    for name in ("foot", "shank", "thigh"):
+        assert getattr(half, name) == getattr(halved, name)
+    assert half.foot_geometry == halved.foot_geometry and leg_subject(subject).body_mass_kg == 30.0
