@@ -47,9 +47,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_pipeline_arguments(p)
     p.add_argument("--loop", action="store_true", help="replay in a loop (until --timeout)")
-    p.add_argument("--rerun", action="store_true", help="add the Rerun bridge node (spawns a viewer unless --rrd/--rerun-url)")
+    p.add_argument("--rerun", action="store_true", help="add the Rerun bridge node (spawns a viewer unless --rrd/--connect)")
     add_rrd_argument(p, "the Rerun bridge writes this .rrd (implies --rerun; works headless)", old=("--rerun-save",))
-    p.add_argument("--rerun-url", metavar="URL", help="the Rerun bridge streams to this viewer, e.g. rerun+http://127.0.0.1:9876/proxy")
+    p.add_argument("--connect", metavar="URL",
+                   help="the Rerun bridge streams to this viewer, e.g. rerun+http://127.0.0.1:9876/proxy (as view --connect)")
+    p.add_argument("--rerun-url", dest="connect", action=DeprecatedAlias, new="--connect", metavar="URL")
     p.set_defaults(func=run)
 
 
@@ -67,7 +69,7 @@ def config_from_args(args: argparse.Namespace):
     return PipelineConfig(
         recording=recording_from_args(args), out_dir=args.out, rate=args.rate, processes=args.processes,
         low_latency=args.low_latency, publish_frames=not args.no_frames, rerun=getattr(args, "rerun", False),
-        rerun_save=getattr(args, "rrd", None), rerun_url=getattr(args, "rerun_url", None),
+        rerun_save=getattr(args, "rrd", None), rerun_url=getattr(args, "connect", None),
         timeout_s=args.timeout, params_file=args.params_file, loop=getattr(args, "loop", False),
     )
 

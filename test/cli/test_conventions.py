@@ -151,6 +151,8 @@ def test_the_walk_catches_a_flag_that_does_not_exist():
     (["discover", "r.mcap", "--json", "-", "--rerun", "o.rrd"], ["discover", "r.mcap", "--json", "-", "--rrd", "o.rrd"],
      ("rrd", "o.rrd")),
     (["pipeline", "r.mcap", "--rerun-save", "o.rrd"], ["pipeline", "r.mcap", "--rrd", "o.rrd"], ("rrd", "o.rrd")),
+    (["pipeline", "r.mcap", "--rerun-url", "rerun+http://127.0.0.1:9876/proxy"],
+     ["pipeline", "r.mcap", "--connect", "rerun+http://127.0.0.1:9876/proxy"], ("connect", "rerun+http://127.0.0.1:9876/proxy")),
 ])
 def test_renamed_flags_still_work_and_warn(old, new, value, capsys):
     parser = build_parser()
@@ -177,8 +179,8 @@ def test_old_and_new_recording_together_is_a_one_line_error(capsys):
 
 def test_deprecated_aliases_are_hidden_from_help():
     parsers = _subcommands()
-    for name, old in (("pipeline", "--recording"), ("pipeline", "--rerun-save"), ("simulate", "--mass"),
-                      ("simulate", "--height"), ("view", "--save"), ("discover", "--rerun")):
+    for name, old in (("pipeline", "--recording"), ("pipeline", "--rerun-save"), ("pipeline", "--rerun-url"),
+                      ("simulate", "--mass"), ("simulate", "--height"), ("view", "--save"), ("discover", "--rerun")):
         text = parsers[name].format_help()
         assert not re.search(re.escape(old) + r"(?![\w-])", text), (name, old)
     assert "--rrd" in parsers["view"].format_help() and "--mass-kg" in parsers["simulate"].format_help()
@@ -197,7 +199,7 @@ def test_defaults_are_the_core_defaults():
     a = p.parse_args(["analyze", "r.mcap", "--json", "-"])
     assert (a.cutoff_hz, a.max_gap_s) == (AnalysisOptions().marker_cutoff_hz, AnalysisOptions().max_gap_s) == (12.0, 0.05)
     b = p.parse_args(["batch", "d", "--out", "o"])
-    assert (b.cutoff_hz, b.max_gap_s) == (BatchOptions().cutoff_hz, BatchOptions().max_gap_s)
+    assert (b.cutoff_hz, b.max_gap_s) == (BatchOptions().cutoff_hz, BatchOptions().max_gap_s) == (a.cutoff_hz, a.max_gap_s)
     c = p.parse_args(["pipeline", "r.mcap"])
     config = PipelineConfig("r.mcap")
     assert (c.out, c.rate, c.timeout) == (config.out_dir, config.rate, config.timeout_s)
