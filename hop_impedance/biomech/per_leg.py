@@ -44,15 +44,17 @@ dynamics (OpenSim's IK, then its coordinate filter):
    leg (:func:`rigid_leg_markers`).
 4. The v1 analysis runs on these markers with its marker filter at
    :data:`PASS_THROUGH_HZ` (it leaves a 12 Hz signal unchanged: the filtering
-   was done on the coordinates, where it keeps the leg rigid; filtering each
-   rebuilt marker again bends the leg in the impact: 8-10 % of the hip's peak).
-   Why the finer grid: the v1 kinematics differentiate the spline of each
-   segment's centre-of-mass path; at the data's 100 Hz that path's second
-   derivative differs from the multibody one (from the angles) by up to 5 %
-   of the hip's peak in the landing impact; on the band-limited 1 kHz
-   coordinates the two agree (OpenSim's InverseDynamicsTool on the same
-   coordinates: within 0.06 % of each joint's peak,
-   ``test/bilateral/test_per_leg_opensim.py``).
+   was done on the coordinates, where it keeps the leg rigid).
+   Against OpenSim's InverseDynamicsTool driven by the analysis' own angles
+   and hip path (hip, % of its peak, left / right;
+   ``bench/per_leg_kinematics.py``): rigid markers filtered one by one (the v1
+   way) 8.1 / 9.7, as that bends the leg in the impact; the pose low-passed
+   at the markers' 100 Hz and the markers filtered again 4.8 / 5.1; the
+   low-passed 100 Hz pose spline-interpolated to 1 kHz 1.3 / 1.6, the spline's
+   knots being in the second derivatives; spline first, then low-pass at
+   1 kHz (this step) 0.02 / 0.04. The v1 kinematics differentiate the spline
+   of each segment's centre-of-mass path, a multibody tool the coordinates:
+   on band-limited 1 kHz coordinates both read the same accelerations.
    ``analysis.options`` are the caller's (the data's bandwidth is the
    coordinates' cut-off, which is what the impedance fit needs).
 
@@ -156,7 +158,8 @@ def smooth_pose(t_s: np.ndarray, pose: np.ndarray, cutoff_hz: float) -> tuple[np
     segment's centre of mass, OpenSim's spline of the coordinates) differentiates
     the same curve. Filtering at the marker rate and then interpolating left the
     spline's knots in the second derivatives: up to 1.6 % of the hip's peak
-    between us and OpenSim on the drop jump, instead of 0.06 %.
+    between us and OpenSim on the drop jump, instead of 0.04 %
+    (``bench/per_leg_kinematics.py``).
 
     Returns ``(grid_s, pose_on_grid)``.
     """
