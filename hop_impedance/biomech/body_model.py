@@ -340,7 +340,7 @@ def body_model_from_stature(subject: Subject) -> BodyModel:
     return body_model(subject.body_mass_kg, lengths, default_foot_geometry(h, subject.sex), subject.sex, h)
 
 
-def with_overrides(model: BodyModel, overrides: dict) -> BodyModel:
+def with_overrides(model: BodyModel, overrides: dict[str, dict[str, float]]) -> BodyModel:
     """Replace segment parameters, e.g. ``{"hat": {"mass_kg": 35.0}}``.
 
     Keys are segment names; values map :class:`Segment` field names to numbers.
@@ -358,7 +358,7 @@ def with_overrides(model: BodyModel, overrides: dict) -> BodyModel:
     return replace(model, **updated)
 
 
-def load_overrides(path: str | Path) -> dict:
+def load_overrides(path: str | Path) -> dict[str, dict[str, float]]:
     """Read a YAML file of per-segment overrides (see :func:`with_overrides`)."""
     import yaml
 

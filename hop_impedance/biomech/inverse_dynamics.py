@@ -82,7 +82,8 @@ class JointLoads:
 
 def cross2(r: np.ndarray, f: np.ndarray) -> np.ndarray:
     """Planar cross product ``r_x f_z - r_z f_x`` over the last axis (ccw positive)."""
-    return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
+    out: np.ndarray = r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
+    return out
 
 
 def proximal_load(
@@ -177,4 +178,5 @@ def inverse_dynamics_2d(
 
 def joint_power(moment_nm: np.ndarray, rhod_rad_s: np.ndarray) -> np.ndarray:
     """Joint power (W), shape (N, 3): ``-M_ext * d(rho)/dt`` (negative = absorbing, braking)."""
-    return -np.asarray(moment_nm) * np.asarray(rhod_rad_s)
+    power: np.ndarray = -np.asarray(moment_nm) * np.asarray(rhod_rad_s)
+    return power

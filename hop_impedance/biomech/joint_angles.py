@@ -48,7 +48,7 @@ def segment_angle(distal_xz: np.ndarray, proximal_xz: np.ndarray) -> np.ndarray:
         continuous over time (NaN samples are passed through).
     """
     d = np.asarray(proximal_xz, float) - np.asarray(distal_xz, float)
-    q = np.arctan2(d[..., 1], d[..., 0])
+    q: np.ndarray = np.arctan2(d[..., 1], d[..., 0])
     ok = np.isfinite(q)
     if ok.any():
         q[ok] = np.unwrap(q[ok])

@@ -42,8 +42,10 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
+import numpy.typing as npt
 
 
 def total_wrench(
@@ -116,7 +118,7 @@ class PlateLayout:
 
 
 def combine_plates(
-    layouts: list[PlateLayout], forces_n: np.ndarray, moments_nm: np.ndarray, origin_m=(0.0, 0.0, 0.0)
+    layouts: list[PlateLayout], forces_n: np.ndarray, moments_nm: np.ndarray, origin_m: npt.ArrayLike = (0.0, 0.0, 0.0)
 ) -> tuple[np.ndarray, np.ndarray]:
     """Paired samples of P plates (plate axes) -> one wrench about ``origin_m`` (lab axes).
 
@@ -159,7 +161,7 @@ class PlateCombinerStage:
     def __init__(
         self,
         layouts: list[PlateLayout],
-        origin_m=(0.0, 0.0, 0.0),
+        origin_m: npt.ArrayLike = (0.0, 0.0, 0.0),
         max_skew_ns: int = 600_000,
         jitter_ns: int = 200_000,
         wait_ns: int = 500_000_000,
@@ -177,7 +179,7 @@ class PlateCombinerStage:
         self.jitter_ns = int(jitter_ns)
         self.wait_ns = int(wait_ns)
         p = len(layouts)
-        self._queues: list[deque] = [deque() for _ in range(p)]
+        self._queues: list[deque[tuple[int, np.ndarray]]] = [deque() for _ in range(p)]  # (stamp ns, wrench row)
         self._skew: list[float | None] = [0.0] + [None] * (p - 1)
         self.newest_ns: list[int | None] = [None] * p
         #: Per plate: instants some other plate had but this one did not (its sample is missing).
@@ -203,7 +205,7 @@ class PlateCombinerStage:
         return [lay.name for lay, n in zip(self.layouts, self.newest_ns)
                 if n is None or newest - n > self.wait_ns]
 
-    def push(self, plate: int, stamps_ns, wrench) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def push(self, plate: int, stamps_ns: npt.ArrayLike, wrench: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Feed plate ``plate``'s samples; returns the combined samples now complete."""
         stamps = np.asarray(stamps_ns, np.int64).reshape(-1)
         w = np.asarray(wrench, float).reshape(-1, 6)
@@ -252,7 +254,8 @@ class PlateCombinerStage:
                     continue
             # Skew-corrected head stamps relative to the reference's (differences first: int64 ns
             # stamps near 1.7e18 lose 256 ns as float64).
-            rel = [(heads[k] - heads[0]) - self._skew[k] for k in range(p)]
+            skew = cast("list[float]", self._skew)  # the same list, every plate locked by now
+            rel = [(heads[k] - heads[0]) - skew[k] for k in range(p)]
             latest = max(rel)
             early = [k for k in range(p) if rel[k] < latest - self.jitter_ns]
             if early:
@@ -261,7 +264,7 @@ class PlateCombinerStage:
                     self._drop_head(k, late_plates)
                 continue
             for k in range(1, p):
-                self._skew[k] += self.DRIFT_GAIN * rel[k]
+                skew[k] += self.DRIFT_GAIN * rel[k]
             out_ns.append(heads[0])
             out_w.append(np.stack([qs[k].popleft()[1] for k in range(p)]))
         if not out_ns:
