@@ -6,6 +6,7 @@ Usage::
     .venv/bin/python bench/simulator_realism.py --write            # also write docs/simulator_realism.md
     .venv/bin/python bench/simulator_realism.py --trunk            # with the trunk-balance moment
     .venv/bin/python bench/simulator_realism.py --flight energy_keeping
+    .venv/bin/python bench/simulator_realism.py --seed-like       # issue 17 candidate (scenarios.seed_like_options)
 
 Every simulated figure is measured by the analysis (``hop-impedance analyze``:
 ``analyze_recording`` + ``analysis_to_json``, stance detection and 2D inverse
@@ -30,7 +31,13 @@ from hop_impedance.biomech.analysis import analysis_to_json, analyze_recording
 from hop_impedance.biomech.joint_angles import joint_angles
 from hop_impedance.biomech.kinematics import sagittal_markers, segment_angles_from_points
 from hop_impedance.recording import MARKER_NAMES
-from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, TRUNK_BALANCE
+from hop_impedance.simulation.scenarios import (
+    DEFAULT_TOUCHDOWN_RHO,
+    PUSH_OFF_TIMING,
+    TRUNK_BALANCE,
+    seed_like_options,
+    toe_tip_ahead_m,
+)
 from hop_impedance.simulation.sensors import SensorConfig, noise_free
 from hop_impedance.simulation.simulate import simulate_recording
 
@@ -81,11 +88,11 @@ CHAIN_POINTS = [MARKER_NAMES.index(n) for n in ("toe", "ankle", "knee", "hip", "
 
 
 def measure(freq_hz: float, hops: int = 6, seed: int = 1, trunk: bool = False, flight: str = "prescribed",
-            posture=DEFAULT_TOUCHDOWN_RHO) -> dict:
+            posture=DEFAULT_TOUCHDOWN_RHO, contact_ahead_m: float = 0.0, push_timing=PUSH_OFF_TIMING) -> dict:
     """Mean per-hop figures that the analysis measures on a noise-free simulated recording (hard surface)."""
     rec, truth = simulate_recording(freq_hz, "hard", hops, seed=seed, sensors=noise_free(SensorConfig()),
                                     touchdown_rho_rad=posture, trunk_balance=TRUNK_BALANCE if trunk else None,
-                                    flight=flight)
+                                    flight=flight, contact_ahead_m=contact_ahead_m, push_timing=push_timing)
     doc = analysis_to_json(analyze_recording(rec))
     mass = doc["subject"]["body_mass_kg"]
     stances = [s for s in doc["stances"] if s["complete"] and s["joints"]][1:]  # the first lands from the lead-in
@@ -183,6 +190,35 @@ def table(results: dict, hopexo: dict) -> str:
     return "\n".join(lines)
 
 
+#: Seed Table 2 overall leg stiffness (kN/m) at 1.53 / 1.87 / 2.20 Hz.
+SEED_LEG_STIFFNESS_KN_M = {1.53: 9.8, 1.87: 14.6, 2.20: 20.9}
+
+
+def seed_newton_check(mass_kg: float = 54.8, g: float = 9.81) -> str:
+    """What Newton's law allows for the seed's Table 1 at its own stance times and frequencies (markdown).
+
+    Over one hop the ground's impulse equals the weight's, so the mean vertical force in stance is
+    ``BW / (f Tc)``; a spring-like contact has a half-sine force (peak = pi/2 x mean) and the centre of
+    mass, landing at ``g (1/f - Tc) / 2``, drops ``v th + g th^2/2 - (Fp/m)(Tc/pi)(th - Tc/pi)`` by
+    mid-stance (``th = Tc/2``); a constant force (the flattest profile) gives the least drop, ``v Tc/4``.
+    The last column tests the reading of Table 1's hip excursion: the seed's leg stiffness (Table 2)
+    equals peak GRF over *half* the hip excursion at all three frequencies.
+    """
+    lines = ["| f (Hz) | seed stance (ms) | seed peak GRF (BW) | half-sine peak for that stance (BW) | "
+             "COM drop, half-sine / constant force (m) | seed hip excursion (m) | seed peak GRF / (excursion/2) "
+             "(kN/m) vs seed Table 2 leg stiffness |", "|---|---|---|---|---|---|---|"]
+    for f, row in SEED_TABLE1.items():
+        tc, period = row["stance_ms"] / 1000.0, 1.0 / f
+        v = g * (period - tc) / 2.0
+        th = tc / 2.0
+        fp = np.pi / 2.0 * g * period / tc  # per unit mass
+        drop = v * th + g * th**2 / 2.0 - fp * (tc / np.pi) * (th - tc / np.pi)
+        k_half = row["grf_bw"] * mass_kg * g / (row["hip_exc_m"] / 2.0) / 1000.0
+        lines.append(f"| {f:.2f} | {row['stance_ms']} | {row['grf_bw']:.1f} | {fp / g:.2f} | {drop:.3f} / "
+                     f"{v * tc / 4.0:.3f} | {row['hip_exc_m']:.2f} | {k_half:.1f} vs {SEED_LEG_STIFFNESS_KN_M[f]} |")
+    return "\n".join(lines)
+
+
 def failed(freq_hz: float, reason: str) -> dict:
     """Placeholder figures (NaN, shown as 'nan') for a frequency whose trial could not be measured."""
     scalar = ("stance_ms", "grf_bw", "grf_n", "hip_exc_m", "k_leg", "freq_hz")
@@ -204,16 +240,29 @@ def main() -> None:
     parser.add_argument("--posture", default=None,
                         help="touchdown ankle rho1, knee flexion, hip flexion (rad), e.g. 1.6,0.8,0.5; "
                              "default scenarios.DEFAULT_TOUCHDOWN_RHO")
+    parser.add_argument("--contact", default="marker", choices=("marker", "toe_tip"),
+                        help="ground contact at the toe marker (default) or at the tip of the toe, the seed's "
+                             "virtual hinge (scenarios.toe_tip_ahead_m)")
+    parser.add_argument("--seed-like", action="store_true",
+                        help="issue 17's candidate: scenarios.seed_like_options (toe-tip contact, its touchdown posture, "
+                             "trunk balance, late push-off); overrides --trunk, --contact, --posture")
     args = parser.parse_args()
+    contact = toe_tip_ahead_m() if args.contact == "toe_tip" else 0.0
     posture = DEFAULT_TOUCHDOWN_RHO
+    push_timing = PUSH_OFF_TIMING
     if args.posture:
         a, k, h = (float(v) for v in args.posture.split(","))
         posture = (a, np.pi + k, np.pi + h)
+    if args.seed_like:
+        opts = seed_like_options()
+        args.trunk, contact, posture, push_timing = True, opts["contact_ahead_m"], opts["touchdown_rho_rad"], opts["push_timing"]
+        args.contact = "toe_tip"
     t0 = time.perf_counter()
     results = {}
     for f in (*SEED_TABLE1, 2.4):
         try:
-            results[f] = measure(f, trunk=args.trunk, flight=args.flight, posture=posture)
+            results[f] = measure(f, trunk=args.trunk, flight=args.flight, posture=posture, contact_ahead_m=contact,
+                                 push_timing=push_timing)
         except ValueError as exc:  # e.g. no calibrated hop, or a trial that stops before a second stance
             results[f] = failed(f, str(exc))
     hopexo = hopexo_means()
@@ -221,9 +270,13 @@ def main() -> None:
     notes = [n for f in results for n in results[f]["notes"]]
     setup = (f"{'with' if args.trunk else 'without'} trunk balance, {args.flight} flight, touchdown posture "
              f"ankle {posture[0]:.2f}, knee {posture[1] - np.pi:.2f}, hip {posture[2] - np.pi:.2f} rad, "
+             f"ground contact {'at the toe marker' if not contact else f'{contact:.3f} m ahead of the toe marker (toe tip)'}, "
+             f"push-off from {push_timing[0]:.0%} for {push_timing[1]:.0%} of the passive stance, "
              f"{min(r['n_stances'] for r in results.values())}-{max(r['n_stances'] for r in results.values())} "
              "analysed stances per frequency")
     print(text)
+    newton = seed_newton_check()
+    print("\nSeed Table 1 against Newton (the seed's own figures, no simulation):\n" + newton)
     for n in notes:
         print("note:", n)
     print(f"({setup}; measured in {time.perf_counter() - t0:.0f} s)")
@@ -231,8 +284,10 @@ def main() -> None:
         doc = ROOT / "docs" / "simulator_realism.md"
         doc.write_text(
             "# Simulator realism\n\nProduced by `.venv/bin/python bench/simulator_realism.py --write"
-            f"{' --trunk' if args.trunk else ''}{'' if args.flight == 'prescribed' else ' --flight ' + args.flight}"
-            f"{' --posture ' + args.posture if args.posture else ''}`; "
+            f"{' --trunk' if args.trunk and not args.seed_like else ''}{'' if args.flight == 'prescribed' else ' --flight ' + args.flight}"
+            f"{' --posture ' + args.posture if args.posture else ''}"
+            f"{'' if args.contact == 'marker' or args.seed_like else ' --contact ' + args.contact}"
+            f"{' --seed-like' if args.seed_like else ''}`; "
             "every simulated figure is measured by the analysis (`hop-impedance analyze`: stance detection and 2D "
             "inverse dynamics from the recorded markers and force plate) on noise-free simulated recordings "
             f"(hard surface, default law: seed Table 2 k0/k1, b0 = 0.5 N m s/rad, push-off; {setup}; "
@@ -244,7 +299,15 @@ def main() -> None:
             "The seed's brake energies are about half of what its own moments and ranges imply for a spring-like joint "
             "(ankle 1.53 Hz: 0.5 x 233 N m x 0.85 rad = 99 J against 51.8 J), so they are probably per leg while its "
             "moments are both legs (as ours are); read the simulated energies against twice the seed's.\n\n"
-            + text + "\n\n" + "\n".join(f"- note: {n}" for n in notes) + "\n"
+            + text + "\n\n" + "\n".join(f"- note: {n}" for n in notes) + "\n\n"
+            "## Seed Table 1 against Newton\n\n"
+            "The seed's own stance time and frequency fix the mean force in stance (impulse = weight x period); "
+            "a spring-like (half-sine) force then has the peak and the centre-of-mass drop below, a constant force "
+            "the least drop. At 2.2 Hz the seed's 3.5 BW is 1.38 x the half-sine peak of its own 282 ms stance, so "
+            "stance time and peak GRF cannot both sit near the seed's means for a spring-like leg; and the seed's "
+            "Table 2 leg stiffness is its peak GRF over half its hip excursion (last column), so Table 1's hip "
+            "excursion reads as twice the leg compression (down and up again), not the hip's range. "
+            "(`seed_newton_check` in this bench.)\n\n" + newton + "\n"
         )
         print(f"wrote {doc}")
         readme = ROOT / "README.md"

@@ -34,7 +34,7 @@ the equations of the fixed coordinates then require *is* the constraint force
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -67,6 +67,9 @@ class Chain:
     heel_along_m, heel_perp_m : float
         Heel marker in the foot frame (m).
     gravity_m_s2 : float
+    toe_marker_along_m, toe_marker_perp_m : float
+        Toe marker in the foot frame (m); zero when the ground contact (the chain's
+        origin, ``g[0:2]``) is the toe marker itself (:func:`contact_ahead_of_toe_marker`).
     """
 
     mass_kg: np.ndarray
@@ -78,6 +81,8 @@ class Chain:
     heel_along_m: float
     heel_perp_m: float
     gravity_m_s2: float = GRAVITY_M_S2
+    toe_marker_along_m: float = 0.0
+    toe_marker_perp_m: float = 0.0
 
     @property
     def total_mass_kg(self) -> float:
@@ -98,6 +103,40 @@ def chain_from_body_model(model: BodyModel) -> Chain:
         heel_along_m=model.foot_geometry.heel_along_m,
         heel_perp_m=model.foot_geometry.heel_perp_m,
     )
+
+
+def contact_ahead_of_toe_marker(chain: Chain, ahead_m: float) -> Chain:
+    """The same body touching the ground ``ahead_m`` in front of the toe marker, along the sole.
+
+    The seed's model (seed 000, Methods) lets the foot touch the floor "through a virtual hinge
+    located at the tip of the toe", while its toe marker sits at the fifth metatarsal head; our
+    body model's foot link runs from that marker to the ankle. This moves the chain's contact
+    point (the hinge the stance pivots about, where the force plate sees the force) forward along
+    the heel->toe line by ``ahead_m`` (m, >= 0): the foot link becomes contact->ankle, ``alpha``
+    is re-measured at the contact, the foot's centre of mass and the heel marker are expressed in
+    the new foot frame, and the toe marker becomes a point of the foot. The joint angle rho1 is
+    unchanged (the contact lies on the sole line, so ``q1 + alpha`` is still the sole's angle);
+    masses and inertias are unchanged. ``ahead_m = 0`` returns ``chain`` itself.
+    """
+    if ahead_m < 0:
+        raise ValueError(f"contact must lie ahead of the toe marker (ahead_m >= 0), got {ahead_m}")
+    if ahead_m == 0:
+        return chain
+    old = np.array([[chain.toe_marker_along_m, chain.toe_marker_perp_m], [chain.heel_along_m, chain.heel_perp_m],
+                    [chain.com_along_m[0], chain.com_perp_m[0]], [chain.length_m[0], 0.0]])
+    toe, heel, com, ankle = old
+    forward = (toe - heel) / np.linalg.norm(toe - heel)
+    contact = toe + ahead_m * forward
+    e1 = (ankle - contact) / np.linalg.norm(ankle - contact)
+    frame = np.array([e1, [-e1[1], e1[0]]])  # rows: new axes in the old frame
+    new_toe, new_heel, new_com = (frame @ (p - contact) for p in (toe, heel, com))
+    length, along, perp = chain.length_m.copy(), chain.com_along_m.copy(), chain.com_perp_m.copy()
+    length[0] = float(np.linalg.norm(ankle - contact))
+    along[0], perp[0] = new_com
+    return replace(chain, length_m=length, com_along_m=along, com_perp_m=perp,
+                   alpha_rad=float(np.arctan2(new_heel[1], new_heel[0])),
+                   heel_along_m=float(new_heel[0]), heel_perp_m=float(new_heel[1]),
+                   toe_marker_along_m=float(new_toe[0]), toe_marker_perp_m=float(new_toe[1]))
 
 
 def _unit(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -135,6 +174,13 @@ def heel_position(chain: Chain, g: np.ndarray) -> np.ndarray:
     g = np.asarray(g, float)
     e, n = _unit(g[..., 2])
     return g[..., 0:2] + chain.heel_along_m * e + chain.heel_perp_m * n
+
+
+def toe_marker_position(chain: Chain, g: np.ndarray) -> np.ndarray:
+    """Toe marker ``[x, z]`` (m), shape (..., 2): the contact point unless the chain touches ahead of it."""
+    g = np.asarray(g, float)
+    e, n = _unit(g[..., 2])
+    return g[..., 0:2] + chain.toe_marker_along_m * e + chain.toe_marker_perp_m * n
 
 
 def segment_com_positions(chain: Chain, g: np.ndarray) -> np.ndarray:

@@ -13,9 +13,9 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-from hop_impedance.biomech.body_model import body_model_from_stature
+from hop_impedance.biomech.body_model import DE_LEVA, body_model_from_stature
 from hop_impedance.recording import Subject
-from hop_impedance.simulation.dynamics import Chain, chain_from_body_model
+from hop_impedance.simulation.dynamics import Chain, chain_from_body_model, contact_ahead_of_toe_marker
 from hop_impedance.simulation.ground import GroundLaw, surface
 from hop_impedance.simulation.hopping_trial import HoppingConfig, touchdown_posture, touchdown_state
 from hop_impedance.simulation.impedance_laws import (
@@ -50,6 +50,8 @@ EXTRA_B1 = (0.05, 0.05, 0.02)  # N m s^2/rad^2
 #: Push-off shape over the joints (ankle-dominated) and default base amplitude (N m).
 PUSH_OFF_WEIGHTS = (1.0, 0.6, 0.3)
 PUSH_OFF_BASE_NM = 40.0
+#: Push-off onset and duration as fractions of the passive calibration stance (:func:`hopping_config`).
+PUSH_OFF_TIMING = (0.35, 0.6)
 #: Time-based activation (seed 001 / Hurst): a_min and tau (s).
 ACTIVATION = TimeActivation(a_min=0.3, tau_s=0.04)
 #: Trunk balance (issue 17, hands on the waist): 800 N m/rad is about twice the trunk's
@@ -57,6 +59,43 @@ ACTIVATION = TimeActivation(a_min=0.3, tau_s=0.04)
 #: trunk stays near its touchdown inclination; 40 N m s/rad damps its pitch (critical damping of the
 #: HAT about the hip with I ~ 1.45 + 31.9 x 0.38^2 ~ 6 kg m^2 would be 2 sqrt(800 x 6) ~ 140).
 TRUNK_BALANCE = TrunkBalance(800.0, 40.0)
+
+
+def toe_tip_ahead_m(subject: Subject = SEED_SUBJECT) -> float:
+    """Distance (m) from the toe marker (fifth metatarsal head) forward to the tip of the toe.
+
+    The seed's foot touches the floor "through a virtual hinge located at the tip of the toe"
+    (seed 000, Methods); our toe marker lies on the sole at 72 % of de Leva's heel..toe-tip foot
+    length, so the tip is the rest of that length ahead of it (0.060 m for the seed's mean subject).
+    Evidence that the seed's ground force acts that far forward: its Table 1 maximal ankle moment
+    over peak GRF is 0.17-0.19 m at all three frequencies, more than the marker's 0.14-0.15 m
+    horizontal distance from the ankle even with the foot flat.
+    """
+    model = body_model_from_stature(subject)
+    return float(DE_LEVA[model.sex]["foot"].length_fraction * subject.body_height_m - model.foot_geometry.heel_toe_m)
+
+
+#: Issue 17 candidate touchdown posture (rad): ankle rho1 1.24 (sole-shank 71 deg), knee and hip flexed
+#: 0.68 and 0.42 rad; with the contact at the toe tip the shank leans forward enough that the force's
+#: lever about the knee is 0.06-0.07 m at peak force, as the seed's Table 1 knee moment over peak GRF.
+SEED_LIKE_TOUCHDOWN_RHO = (1.24, np.pi + 0.68, np.pi + 0.42)
+#: Push-off late in stance (issue 17): from 50 % of the passive stance to its end, after maximal flexion.
+LATE_PUSH_OFF_TIMING = (0.5, 0.5)
+
+
+def seed_like_options(subject: Subject = SEED_SUBJECT) -> dict:
+    """Keyword options of :func:`hopping_config` / ``simulate_recording`` for issue 17's candidate hopper.
+
+    The mechanism (README, "Simulator realism"): the ground contact at the tip of the toe (the seed's
+    virtual hinge, :func:`toe_tip_ahead_m`), which lengthens the force's lever about the ankle to the
+    seed's 0.17-0.19 m and so softens the leg vertically; a touchdown posture with the knee and hip
+    flexed (:data:`SEED_LIKE_TOUCHDOWN_RHO`); the trunk-balance moment (hands on the waist,
+    :data:`TRUNK_BALANCE`); the push-off late in stance (:data:`LATE_PUSH_OFF_TIMING`). One set for all
+    frequencies; the joint laws stay seed Table 2. Not the default (bench/simulator_realism.py
+    --seed-like measures it against seed Table 1).
+    """
+    return {"touchdown_rho_rad": SEED_LIKE_TOUCHDOWN_RHO, "trunk_balance": TRUNK_BALANCE,
+            "contact_ahead_m": toe_tip_ahead_m(subject), "push_timing": LATE_PUSH_OFF_TIMING}
 
 
 @dataclass(frozen=True)
@@ -137,21 +176,27 @@ def hopping_config(
     variability: bool = True,
     trunk_balance: TrunkBalance | None = None,
     flight: str = "prescribed",
+    contact_ahead_m: float = 0.0,
+    push_timing: tuple[float, float] = PUSH_OFF_TIMING,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
     The push-off is timed from a passive stance on the calibration surface:
-    onset at 35 % and duration 60 % of that stance. ``calibration_surface``
+    onset and duration are the fractions ``push_timing`` of that stance (default
+    :data:`PUSH_OFF_TIMING`: 35 % and 60 %). ``calibration_surface``
     (default: the trial's surface) is the surface the law is tuned for; with
     ``unexpected_surface`` the listed hops land on that surface instead.
     ``trunk_balance`` (e.g. :data:`TRUNK_BALANCE`) and ``flight`` are passed to
-    :class:`HoppingConfig` (defaults: none, prescribed flight).
+    :class:`HoppingConfig` (defaults: none, prescribed flight). ``contact_ahead_m``
+    moves the ground contact that far in front of the toe marker
+    (:func:`~hop_impedance.simulation.dynamics.contact_ahead_of_toe_marker`; e.g.
+    :data:`TOE_TIP_AHEAD_M`, the seed's hinge at the tip of the toe; default 0, the marker).
     """
-    chain = chain_from_body_model(body_model_from_stature(subject))
+    chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
     expected = surface(calibration_surface or surface_name)
     passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0)
     ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
-    law = build_law(freq_hz, effects, 0.35 * ts, 0.6 * ts)
+    law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts)
     config = HoppingConfig(
         freq_hz=freq_hz,
         n_hops=n_hops,

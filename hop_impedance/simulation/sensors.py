@@ -9,7 +9,9 @@ so ``cop_x = -torque.y / force.z`` is where that line meets the plate
 surface (the toe's x when the toe is at z = 0 or Fx = 0). The two feet are
 lumped symmetrically about y = 0, so the contact point has y = 0.
 
-Markers: the six contract markers from the simulated segment geometry, in the
+Markers: the six contract markers from the simulated segment geometry (the toe
+marker is the contact point, or a point of the foot behind it when the chain
+touches the ground ahead of the marker), in the
 sagittal x-z plane at a constant ``y = marker_y_m`` (right side, -0.1 m).
 
 Effects, each off when its value is 0: Gaussian force noise (N, each axis),
@@ -26,7 +28,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from hop_impedance.recording import MARKER_NAMES, ForcePlateSeries, MarkerSeries, Recording, Subject
-from hop_impedance.simulation.dynamics import heel_position, joint_positions
+from hop_impedance.simulation.dynamics import heel_position, joint_positions, toe_marker_position
 from hop_impedance.simulation.hopping_trial import HoppingTrial
 
 #: Default first stamp (ns): 2023-11-14T22:13:20Z, an ordinary ROS wall-clock stamp.
@@ -83,7 +85,8 @@ def marker_positions_m(trial: HoppingTrial, times_s: np.ndarray, y_m: float) -> 
     g = trial.sample(times_s)["g"]
     joints = joint_positions(trial.chain, g)  # toe, ankle, knee, hip, head
     heel = heel_position(trial.chain, g)
-    xz = np.stack([joints[:, 0], heel, joints[:, 1], joints[:, 2], joints[:, 3], joints[:, 4]], axis=1)
+    toe = toe_marker_position(trial.chain, g)  # the contact point unless the chain touches ahead of it
+    xz = np.stack([toe, heel, joints[:, 1], joints[:, 2], joints[:, 3], joints[:, 4]], axis=1)
     out = np.empty(xz.shape[:2] + (3,))
     out[..., 0], out[..., 1], out[..., 2] = xz[..., 0], y_m, xz[..., 1]
     return out

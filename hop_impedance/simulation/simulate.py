@@ -10,7 +10,13 @@ from hop_impedance.biomech.body_model import body_model_from_stature
 from hop_impedance.recording import Recording, Subject
 from hop_impedance.simulation.hopping_trial import simulate_hopping
 from hop_impedance.simulation.impedance_laws import TrunkBalance
-from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, SEED_SUBJECT, Effects, hopping_config
+from hop_impedance.simulation.scenarios import (
+    DEFAULT_TOUCHDOWN_RHO,
+    PUSH_OFF_TIMING,
+    SEED_SUBJECT,
+    Effects,
+    hopping_config,
+)
 from hop_impedance.simulation.sensors import SensorConfig, sample_recording
 from hop_impedance.simulation.truth import trial_truth, truth_path, write_truth
 
@@ -32,6 +38,8 @@ def simulate_recording(
     generator: dict | None = None,
     trunk_balance: TrunkBalance | None = None,
     flight: str = "prescribed",
+    contact_ahead_m: float = 0.0,
+    push_timing: tuple[float, float] = PUSH_OFF_TIMING,
 ) -> tuple[Recording, dict]:
     """Simulate a hopping trial and sample it as a contract recording.
 
@@ -62,8 +70,11 @@ def simulate_recording(
         Seeded hop-to-hop variability on (posture, speed target, push-off).
     generator : dict, optional
         Stored as is in the truth file (e.g. the command line).
-    trunk_balance, flight :
-        Trunk-balance moment at the hip and flight model (:func:`hopping_config`; defaults: none, prescribed).
+    trunk_balance, flight, contact_ahead_m, push_timing :
+        Trunk-balance moment at the hip, flight model, ground contact ahead of the toe marker (m) and
+        push-off onset/duration as fractions of the passive stance (:func:`hopping_config`; defaults:
+        none, prescribed, 0 = at the marker, :data:`PUSH_OFF_TIMING`). :func:`seed_like_options` bundles
+        issue 17's candidate.
 
     Returns
     -------
@@ -75,6 +86,7 @@ def simulate_recording(
         freq_hz, surface_name, n_hops, effects, subject=subject, touchdown_rho_rad=touchdown_rho_rad,
         unexpected_surface=unexpected_surface, unexpected_hops=unexpected_hops,
         calibration_surface=tuned_for, variability=variability, trunk_balance=trunk_balance, flight=flight,
+        contact_ahead_m=contact_ahead_m, push_timing=push_timing,
     )
     trial = simulate_hopping(chain, config, seed=seed)
     rng = np.random.default_rng([seed, 1])

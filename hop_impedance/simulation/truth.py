@@ -147,6 +147,8 @@ def trial_truth(
                              "COM ballistic, segment angles quintic to touchdown rates that keep the take-off's "
                              "segment kinetic energy plus the springs' returned energy; force plate zero"),
             "trunk_balance": None if cfg.trunk_balance is None else cfg.trunk_balance.to_dict(),
+            "contact_ahead_of_toe_marker_m": float(np.hypot(trial.chain.toe_marker_along_m,
+                                                            trial.chain.toe_marker_perp_m)),
             "horizontal_contact": ("no-slip kinematic constraint at the toe while |Fx| <= mu Fz, Coulomb sliding "
                                    "beyond" if cfg.friction_coefficient is not None
                                    else "no-slip kinematic constraint at the toe"),
