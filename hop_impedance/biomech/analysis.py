@@ -78,6 +78,13 @@ class AnalysisOptions:
         within this many seconds of the first complete frame and before the
         first take-off (:func:`calibration_markers`, the rule the live stage
         uses, so live and offline share one model); None = no time limit.
+    post_takeoff_s : float or None
+        Short windows (issue 15, "low latency by default"): each stance is
+        analysed on its own window from ``min(touchdown - pad_s, previous
+        take-off)`` to ``take-off + post_takeoff_s`` with the end-of-stance
+        treatment of :func:`extend_past_window` (force known up to the window
+        end, markers up to the last frame stamped at or before it), the
+        function the live stage runs. None = the whole record at once.
     """
 
     marker_cutoff_hz: float = DEFAULT_CUTOFF_HZ
@@ -89,6 +96,7 @@ class AnalysisOptions:
     body_model: BodyModel | None = None
     overrides: dict | None = None
     calibration_s: float | None = 1.0
+    post_takeoff_s: float | None = None
 
 
 @dataclass
@@ -321,6 +329,141 @@ def _stance_result(k, stances, t, zeroed, kin, loads, gaps, span_reason, model, 
     return res
 
 
+#: Span synthesised past a short window's end before filtering (s): the zero-lag filters' edge
+#: transient (time constant ~13 ms at 12 Hz) has decayed long before it reaches the stance.
+TAIL_S = 0.3
+#: Marker frames (the last ones at or before the window end) the extrapolating polynomial is fitted to.
+MARKER_FIT_FRAMES = 2
+#: Degree of that polynomial (1: each marker goes on at the velocity of its last two frames).
+MARKER_FIT_DEGREE = 1
+
+
+def short_window(stances: list[Stance], k: int, options: AnalysisOptions) -> tuple[float, float]:
+    """Window of stance ``k`` when ``options.post_takeoff_s`` is set (s): (start, take-off + post_takeoff_s).
+
+    Starts at ``touchdown - pad_s`` or the previous take-off if earlier, so
+    the previous flight (the plate offset used for this stance) is whole.
+    """
+    s = stances[k]
+    start = s.touchdown_s - options.pad_s
+    if k > 0:
+        start = min(start, stances[k - 1].takeoff_s)
+    return start, s.takeoff_s + options.post_takeoff_s
+
+
+def window_span(data: SpanData, start_s: float, end_s: float) -> SpanData:
+    """What a live stage knows of ``[start_s, end_s]``: force samples inside, marker frames stamped at or before the end.
+
+    The last marker frame before ``start_s`` is kept (the spline then
+    interpolates at the window start); none after ``end_s``: a live stage
+    cannot wait for a frame beyond the window (up to one marker period
+    later). The rule uses the stamps only, so any ``data`` holding the
+    window and a frame before it (the whole record offline, the stage's
+    buffer live) gives the same span.
+    """
+    t = data.force_t_s
+    sel = (t >= start_s) & (t <= end_s)
+    out = SpanData(t[sel], data.wrench[sel])
+    if data.marker_t_s is not None:
+        tm = data.marker_t_s
+        i0 = max(int(np.searchsorted(tm, start_s, side="left")) - 1, 0)
+        i1 = int(np.searchsorted(tm, end_s, side="right"))
+        out.marker_t_s, out.markers_xz = tm[i0:i1], data.markers_xz[i0:i1]
+    return out
+
+
+def extend_past_window(span: SpanData, stances: list[Stance], k: int, options: AnalysisOptions) -> SpanData:
+    """End-of-stance treatment of a short window: data synthesised for ``TAIL_S`` past its end.
+
+    The zero-lag filters and the marker splines need data after the
+    take-off; a window ending a few ms after it makes them bend the end of
+    the stance (odd-extension padding mirrors the stance force below zero).
+    What the data must be after the window end is known or predictable:
+
+    - force: after a take-off the plate carries no load, so the raw wrench
+      is the plate offset. The extension repeats the offset of the flight
+      before the stance (its mean wrench, :func:`force_plate.flight_offsets`)
+      at the force rate; the following flight's offset estimate is then that
+      same baseline (the zeroing sees only synthesised samples in its
+      interior) instead of the mean of the few samples the window holds.
+      No flight before the stance in the window: zero offset, what the
+      zeroing assumes without flights.
+    - markers: each marker is extrapolated from the last
+      ``MARKER_FIT_FRAMES`` frames at or before the window end by a
+      least-squares polynomial of degree ``MARKER_FIT_DEGREE`` in time,
+      at the marker rate: by default the straight line through the last
+      two frames (constant velocity). A marker whose last frame is missing
+      is not extrapolated (its gap runs to the edge, as before).
+
+    Measured (``bench/low_latency_windows.py``'s comparison with batch, 36
+    cells of k0/k1 median recovery errors; cells moved by more than 2
+    percentage points at PAD = 5 / 10 / 20 / 50 ms): straight line through 2
+    frames 25 / 19 / 10 / 2; quadratic through 4 frames 24 / 18 / 14 / 3;
+    straight line fitted to 3 or 4 frames 21-22 / 19-21 / 16-19 / 4-5.
+    Also tried at 5 ms and dropped: point reflection about the last frame
+    (the filter's own odd padding) 26; quadratic or cubic over 3-20 frames
+    23-30; a "ballistic" model (whole-body centre of mass moving with the
+    plate's F/m - g, exactly -g after take-off, segment angles continued by
+    a polynomial, toe placed where the COM puts it) 20-28. The force
+    treatment alone is exact: with the true markers after the window end,
+    0 of 36 cells move (largest 1.9 pp). What no extrapolation from the
+    frames before take-off gives is the motion after it: on clean simulated
+    data the segment angular accelerations change by 50-100 rad/s^2 within
+    10-20 ms around take-off (the plate force drops), and the batch
+    filters average 30-50 ms of that motion into the stance's end. Even
+    the true markers up to take-off + 15 / 25 / 35 / 55 ms (then a
+    quadratic) leave 19 / 7 / 5 / 3 cells moved.
+
+    Returns a new :class:`SpanData`; ``span`` is not changed.
+    """
+    t, w = span.force_t_s, span.wrench
+    dt = 1.0 / sampling_rate_hz(t)
+    t_ext = t[-1] + dt * np.arange(1, int(np.ceil(TAIL_S / dt)) + 1)
+    before = [(s.touchdown_s, s.takeoff_s) for s in stances[: k + 1]]
+    flights = [f for f in flight_intervals(before, float(t[0]), float(t[-1])) if f[1] <= stances[k].touchdown_s]
+    _, offsets = flight_offsets(t, w, flights, options.flight_margin_s)
+    baseline = offsets[-1] if len(offsets) else np.zeros(w.shape[1])
+    out = SpanData(np.concatenate([t, t_ext]), np.vstack([w, np.tile(baseline, (t_ext.size, 1))]))
+    if span.marker_t_s is None or len(span.marker_t_s) < 2:
+        return out
+    tm, xz = span.marker_t_s, span.markers_xz
+    dtm = 1.0 / sampling_rate_hz(tm)
+    tm_ext = tm[-1] + dtm * np.arange(1, int(np.ceil((t_ext[-1] - tm[-1]) / dtm)) + 2)
+    xz_ext = np.full((tm_ext.size,) + xz.shape[1:], np.nan)
+    for m in range(xz.shape[1]):
+        finite = np.all(np.isfinite(xz[:, m]), axis=1)
+        if not finite[-1]:
+            continue
+        run = finite.size - (np.argmin(finite[::-1]) if not finite.all() else finite.size)
+        last = np.arange(max(run, finite.size - MARKER_FIT_FRAMES), finite.size)
+        deg = min(MARKER_FIT_DEGREE, last.size - 1)
+        coef = np.polynomial.polynomial.polyfit(tm[last] - tm[-1], xz[last, m], deg)
+        xz_ext[:, m] = np.polynomial.polynomial.polyval(tm_ext - tm[-1], coef).T
+    out.marker_t_s, out.markers_xz = np.concatenate([tm, tm_ext]), np.concatenate([xz, xz_ext])
+    return out
+
+
+def analyze_short_window(
+    data: SpanData, stances: list[Stance], k: int, model: BodyModel | None, body_mass_kg: float, options: AnalysisOptions
+) -> tuple[StanceResult, SpanData]:
+    """Stance ``k`` analysed on its short window (``options.post_takeoff_s``): one function live and offline.
+
+    ``data`` may hold more than the window (the whole record offline, the
+    stage's buffer live): the window is cut here (:func:`short_window`,
+    :func:`window_span`), treated (:func:`extend_past_window`) and analysed
+    with only the stances up to ``k`` (a later one is not known live); the
+    timing fields (flight after, hop frequency) come from ``stances``.
+
+    Returns the result and the window's data (for the message-loss check).
+    """
+    start, end = short_window(stances, k, options)
+    span = window_span(data, start, end)
+    extended = extend_past_window(span, stances, k, options)
+    result = analyze_span(extended, stances[: k + 1], [k], model, body_mass_kg, options)[0]
+    result.flight_before_s, result.flight_after_s, result.hop_frequency_hz = stance_timing(stances, k)
+    return result, span
+
+
 def recording_span(rec: Recording) -> SpanData:
     """The whole recording as :class:`SpanData` (times relative to ``rec.start_ns``)."""
     if len(rec.force) < 2:
@@ -360,8 +503,13 @@ def analyze_recording(rec: Recording, options: AnalysisOptions | None = None) ->
     if model is None and data.markers_xz is not None:
         until = rec.start_ns + round(detector.first_takeoff_s * 1e9) if np.isfinite(detector.first_takeoff_s) else None
         model = body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s, until), options.overrides)
-    results = analyze_span(data, stances, list(range(len(stances))), model, rec.subject.body_mass_kg, options)
-    _reject_holes(results, data, options)
+    if options.post_takeoff_s is None:
+        results = analyze_span(data, stances, list(range(len(stances))), model, rec.subject.body_mass_kg, options)
+        _reject_holes(results, data, options)
+    else:
+        windows = [analyze_short_window(data, stances, k, model, rec.subject.body_mass_kg, options) for k in range(len(stances))]
+        results = [r for r, _ in windows]
+        _reject_holes(results, data, options, [span for _, span in windows])
     return RecordingAnalysis(rec.subject, model, rec.start_ns, recording_info(rec), results, list(rec.warnings) + detector.warnings, options)
 
 
@@ -400,12 +548,15 @@ def calibration_markers(markers: MarkerSeries, calibration_s: float | None, unti
     return MarkerSeries(markers.stamp_ns[keep], markers.names, markers.positions_m[keep])
 
 
-def _reject_holes(results: list[StanceResult], data: SpanData, options: AnalysisOptions) -> None:
+def _reject_holes(results: list[StanceResult], data: SpanData, options: AnalysisOptions,
+                  windows: list[SpanData] | None = None) -> None:
     """Reject stances with missing samples inside (a force gap the detector bridged), as the live stage does.
 
     Same rule and nominal periods (first 50 steps) as
     ``stages.StanceAnalysisStage._reject_on_loss``, so a 0.3 s force gap inside a
     stance is a rejection offline too, not a longer stance with a lower peak.
+    ``windows``: each stance's short window (:func:`analyze_short_window`),
+    checked instead of ``data`` as the live stage checks it.
     """
     from hop_impedance.biomech.stages import NominalPeriod, missing_samples_reason  # stages imports this module
 
@@ -413,11 +564,13 @@ def _reject_holes(results: list[StanceResult], data: SpanData, options: Analysis
     force_period.update(data.force_t_s)
     if data.marker_t_s is not None:
         marker_period.update(data.marker_t_s)
-    for res in results:
+    for k, res in enumerate(results):
         if not res.complete:
             continue  # cut by the recording's start or end: already rejected for that
-        reason = missing_samples_reason(data, res.touchdown_s, res.takeoff_s, options.max_gap_s,
-                                        force_period_s=force_period.value, marker_period_s=marker_period.value)
+        span, end = (data, None) if windows is None else (windows[k], res.takeoff_s + options.post_takeoff_s)
+        reason = missing_samples_reason(span, res.touchdown_s, res.takeoff_s, options.max_gap_s,
+                                        force_period_s=force_period.value, marker_period_s=marker_period.value,
+                                        data_end_s=end)
         if reason is not None:
             res.rejection_reason = reason if res.rejection_reason is None else f"{reason}; {res.rejection_reason}"
             res.joints = None

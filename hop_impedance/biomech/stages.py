@@ -35,13 +35,14 @@ the marker stream up to its last frame stamped at or before the window's end
 beyond the end; no frame past the end is waited for or used). If the
 detector withdraws the take-off (the force came back within
 ``min_flight_s``), the stage emits a :data:`WITHDRAWN` result for that
-stance (no joint data) and analyses it again at its real take-off. Differences from batch,
-all at the end of the stance: the plate offset of the following flight is
-the mean of its first ``post_pad_s - flight_margin_s`` only, and the
-zero-lag filters and splines see the window edge ``post_pad_s`` after
-take-off (filter time constant ~13 ms at 12 Hz). The test
-``test/biomech/test_stages_low_latency.py`` measures the difference on the
-bundled recordings (figures in docs/pipeline.md).
+stance (no joint data) and analyses it again at its real take-off. Each
+stance is analysed by :func:`analysis.analyze_short_window`, the function
+``analyze`` runs with ``AnalysisOptions.post_takeoff_s`` set (same window,
+same end-of-stance treatment: force continued with the flight baseline,
+markers extrapolated), so live and offline results are equal
+(test/biomech/test_short_windows.py). Differences from batch are at the end
+of the stance, where the zero-lag filters and splines need the motion after
+the window's end (figures in docs/pipeline.md, "Batch vs low-latency").
 
 Message loss
 ------------
@@ -57,9 +58,13 @@ loss spread over the whole window turns into a gap.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
-from hop_impedance.biomech.analysis import AnalysisOptions, SpanData, StanceResult, analyze_span, calibration_markers
+from hop_impedance.biomech.analysis import (
+    AnalysisOptions, SpanData, StanceResult, analyze_short_window, analyze_span, calibration_markers, short_window,
+)
 from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.biomech.kinematics import body_model_from_markers
 from hop_impedance.biomech.stance_detection import ContactEvent, DetectorOptions, Stance, StanceDetector
@@ -105,8 +110,10 @@ class StanceAnalysisStage:
     body_mass_kg : float
     options : AnalysisOptions, optional
     post_pad_s : float or None
-        None (default) gives batch-identical results (window up to the next
-        touchdown); a value selects the low-latency mode (module docstring).
+        None (default): ``options.post_takeoff_s``, None there too gives
+        batch-identical results (window up to the next touchdown); a value
+        selects the low-latency mode (module docstring) and is the options'
+        ``post_takeoff_s`` from then on.
     subject : Subject, optional
         With ``model`` None: scale the body model from the streamed markers by
         the rule ``analyze`` uses (:func:`analysis.calibration_markers`: the
@@ -128,10 +135,14 @@ class StanceAnalysisStage:
     ) -> None:
         if post_pad_s is not None and not post_pad_s > 0:
             raise ValueError(f"post_pad_s must be > 0 s (or None for batch mode), got {post_pad_s}")
+        self.options = options or AnalysisOptions()
+        if post_pad_s is None:
+            post_pad_s = self.options.post_takeoff_s
+        else:  # one pad for the windows and analyze's short-window treatment
+            self.options = replace(self.options, post_takeoff_s=post_pad_s)
         self.post_pad_s = post_pad_s
         self.model = model
         self.body_mass_kg = float(body_mass_kg)
-        self.options = options or AnalysisOptions()
         self.detector = StanceDetector(self.options.detector, self.body_mass_kg * GRAVITY_M_S2)
         self._force_t: list[np.ndarray] = []
         self._wrench: list[np.ndarray] = []
@@ -283,12 +294,12 @@ class StanceAnalysisStage:
         return stances
 
     def _window(self, stances: list[Stance], k: int) -> tuple[float, float]:
+        if self.post_pad_s is not None:
+            return short_window(stances, k, self.options)
         s, pad = stances[k], self.options.pad_s
         start = s.touchdown_s - pad
         if k > 0:
             start = min(start, stances[k - 1].takeoff_s)
-        if self.post_pad_s is not None:
-            return start, s.takeoff_s + self.post_pad_s
         end = s.takeoff_s + pad
         if k + 1 < len(stances):
             end = max(end, stances[k + 1].touchdown_s)
@@ -307,8 +318,12 @@ class StanceAnalysisStage:
                 break
             if final and k + 1 >= len(stances) and self.post_pad_s is None:
                 end = np.inf  # the last flight runs to the end of the data, as in batch
-            data = self._span(start, end)
-            result = analyze_span(data, stances, [k], self.model, self.body_mass_kg, self.options)[0]
+            if self.post_pad_s is not None:  # the function analyze runs; it cuts the same window from the buffer
+                result, data = analyze_short_window(self._span(start - 0.1, end), stances, k, self.model,
+                                                    self.body_mass_kg, self.options)
+            else:
+                data = self._span(start, end)
+                result = analyze_span(data, stances, [k], self.model, self.body_mass_kg, self.options)[0]
             out.append(self._reject_on_loss(result, data, end))
             self._next += 1
             provisional = self.detector.provisional_stance
