@@ -326,16 +326,17 @@ def analyses_to_json(analyses: dict[str, RecordingAnalysis], add_fits=None) -> d
     """
     from hop_impedance.biomech.analysis import analysis_to_json
 
-    legs, stances, doc = {}, [], {}
+    legs, stances, doc, warnings = {}, [], {}, []
     for side, analysis in analyses.items():
         doc = analysis_to_json(analysis)
         if add_fits is not None:
             add_fits(doc, analysis)
         legs[side] = {"segments": doc["subject"]["segments"], "model_structure": doc.get("model_structure")}
         stances += [{**stance, "side": side} for stance in doc["stances"]]
+        warnings += [w for w in doc["warnings"] if w not in warnings]  # both legs' notes (e.g. each rigid fit's)
     subject = {k: v for k, v in doc["subject"].items() if k != "segments"}
     return {"schema": "hop_impedance.analyze_per_leg/1", "subject": subject, "recording": doc["recording"],
-            "warnings": doc["warnings"], "legs": legs, "stances": stances}
+            "warnings": warnings, "legs": legs, "stances": stances}
 
 
 def load_share(bilateral: BilateralRecording, t_s: np.ndarray) -> np.ndarray:

@@ -44,6 +44,8 @@ def test_per_leg_json_matches_the_library(tmp_path):
         np.testing.assert_allclose(knee, lib[0].joints.moment_nm[:, 1], rtol=1e-6, atol=1e-6)
         assert mine[0]["joints"]["knee"]["fit"]["status"] == "solved"
     assert "2 with inverse dynamics" in run.stderr
+    for side in ("left", "right"):  # each leg's kinematics are named: its rigid fit and how close the markers were to it
+        assert sum(w.startswith(f"{side} leg: kinematics of a rigid-segment fit") for w in doc["warnings"]) == 1
 
 
 def test_per_leg_on_a_v1_file_is_a_one_line_error(tmp_path):
