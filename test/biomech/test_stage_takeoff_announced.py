@@ -43,6 +43,7 @@ def test_the_stage_scales_the_offline_model_and_emits_each_stance_5_ms_after_its
     assert rest == []
     for at, s in emitted:  # data reached take-off + 5 ms (force) and the marker frame at or before it
         assert 0.005 - 1e-6 <= at - s.takeoff_s < 0.006
+        assert s.rejection_reason is None and s.joints is not None  # markers past the last frame extrapolated
 
 
 def _hop_with_dip(dip_s: float, fs: float = 1000.0):
