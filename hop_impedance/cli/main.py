@@ -3,7 +3,9 @@
 Each sub-command lives in its own module ``hop_impedance/cli/<name>_cmd.py``
 exposing ``register(subparsers)``, which adds its parser and sets
 ``func=run``, following the conventions in :mod:`hop_impedance.cli.conventions`.
-Heavy imports (rclpy, scipy, rerun) happen inside ``run`` so that ``--help`` stays fast and side-effect free.
+Heavy imports (rclpy, scipy, rerun) happen inside ``run``, so building the parser and
+``hop-impedance --help`` import none of them (test/cli/test_conventions.py). A sub-command's
+``--help`` imports the modules whose defaults it shows (``analyze --help``: the analysis, ~1-2 s).
 """
 
 from __future__ import annotations
