@@ -194,7 +194,8 @@ def rigid_leg_markers(markers: MarkerSeries, model: BodyModel, cutoff_hz: float,
     pose = fit_leg_pose(filled, model)
     fit_rms = np.sqrt(np.mean(np.sum((leg_pose_markers(pose, model) - filled)[:, _LEG_MARKERS] ** 2, axis=2), axis=1))
     grid, smooth = smooth_pose(t, pose, cutoff_hz)
-    ok = np.interp(grid, t, np.all(reliable, axis=1).astype(float)) >= 1.0
+    # per marker: a rebuilt marker is missing where that marker was in an unfilled gap, so the analysis names it
+    ok = np.column_stack([np.interp(grid, t, reliable[:, c].astype(float)) >= 1.0 for c in range(reliable.shape[1])])
     xz = leg_pose_markers(smooth, model)
     positions = np.empty(xz.shape[:2] + (3,))
     positions[..., 0], positions[..., 2] = xz[..., 0], xz[..., 1]

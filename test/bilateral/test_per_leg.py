@@ -137,3 +137,25 @@ def test_leg_subject_scales_the_leg_model(bilateral):
     for name in ("foot", "shank", "thigh"):
         assert getattr(half, name) == getattr(halved, name)
     assert half.foot_geometry == halved.foot_geometry and leg_subject(subject).body_mass_kg == 30.0
+
+
+@pytest.mark.parametrize("gap_s", [0.03, 0.3])
+def test_rigid_fit_keeps_the_gap_rules(bilateral, gap_s):
+    """A marker occluded inside the contact: the rigid fit fills it as the v1 kinematics do (<= max_gap_s) and
+    otherwise leaves the rebuilt markers missing there, so the leg's stance gets the same verdict as with the
+    measured markers (rigid=False): accepted for a 0.03 s gap (0.04 s between visible frames, max_gap_s 0.05), rejected naming the marker for 0.3 s."""
+    left = bilateral.left_markers
+    t = (left.stamp_ns - bilateral.recording.start_ns) * 1e-9
+    positions = left.positions_m.copy()
+    positions[(t >= 1.6) & (t < 1.6 + gap_s), left.names.index("knee")] = np.nan
+    holed = replace(bilateral, left_markers=replace(left, positions_m=positions))
+    verdicts = {}
+    for rigid in (True, False):
+        stances = [s for s in analyze_legs(holed, rigid=rigid)["left"].stances if s.touchdown_s < 1.6 < s.takeoff_s]
+        assert len(stances) == 1
+        verdicts[rigid] = stances[0].rejection_reason
+    print(f"{gap_s} s knee gap in the left leg's contact: rigid {verdicts[True]!r}, measured {verdicts[False]!r}")
+    assert verdicts[True] == verdicts[False]
+    assert (verdicts[True] is None) == (gap_s < 0.1)
+    if gap_s > 0.1:
+        assert "knee" in verdicts[True]
