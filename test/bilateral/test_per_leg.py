@@ -143,7 +143,8 @@ def test_leg_subject_scales_the_leg_model(bilateral):
 def test_rigid_fit_keeps_the_gap_rules(bilateral, gap_s):
     """A marker occluded inside the contact: the rigid fit fills it as the v1 kinematics do (<= max_gap_s) and
     otherwise leaves the rebuilt markers missing there, so the leg's stance gets the same verdict as with the
-    measured markers (rigid=False): accepted for a 0.03 s gap (0.04 s between visible frames, max_gap_s 0.05), rejected naming the marker for 0.3 s."""
+    measured markers (rigid=False): accepted for a 0.03 s gap (0.04 s between visible frames, max_gap_s 0.05),
+    rejected naming the marker for 0.3 s."""
     left = bilateral.left_markers
     t = (left.stamp_ns - bilateral.recording.start_ns) * 1e-9
     positions = left.positions_m.copy()
