@@ -31,8 +31,9 @@ COMMANDS = set(COMMAND_MODULES)
 #: A flag: two dashes, a lower-case name (not part of a longer word or of "---").
 FLAG = re.compile(r"(?<![\w-])--([a-z][a-z0-9-]*)")
 #: A sub-command named in a text ("hop-impedance CMD", a ``CMD --flag`` literal), or a script ("bench/x.py"),
-#: whose flags are not ours. Either holds to the end of its line.
-NAMED = re.compile(r"(?:hop-impedance\s+|``)(" + "|".join(sorted(COMMANDS)) + r") |([\w/.-]+\.py)\b")
+#: whose flags are not ours. Either holds until the phrase ends (END), across wrapped lines.
+NAMED = re.compile(r"(?:hop-impedance\s+|``)(" + "|".join(sorted(COMMANDS)) + r")\s|([\w/.-]+\.py)\b")
+END = re.compile(r"``|\)|;|\.\s|\n\s*\n|\n\s*- ")
 ANY = "*"  # a hint that names no sub-command, in a module not tied to one: the flag must exist on some sub-command
 
 #: The sub-command a module's hints are about, when the text does not name one.
@@ -87,15 +88,16 @@ def _default_command(rel: str) -> str | None:
 
 
 def flags_named(text: str, default: str | None) -> list[tuple[str, str]]:
-    """(sub-command, flag) of each flag in ``text``; a named sub-command holds to the end of its line."""
+    """(sub-command, flag) of each flag in ``text``; a named sub-command or script holds until its phrase ends."""
     found = []
-    for line in text.splitlines():
-        command = default
-        for m in re.finditer(f"{NAMED.pattern}|{FLAG.pattern}", line):
-            if m.group(1) or m.group(2):
-                command = m.group(1)  # a script's flags (group 2) are not checked
-            elif command is not None:
-                found.append((command, "--" + m.group(3)))
+    command = default
+    for m in re.finditer(f"{NAMED.pattern}|{FLAG.pattern}|(?P<end>{END.pattern})", text):
+        if m.group(1) or m.group(2):
+            command = m.group(1)  # a script's flags (group 2) are not checked
+        elif m.group("end"):
+            command = default
+        elif command is not None:
+            found.append((command, "--" + m.group(3)))
     return found
 
 
@@ -132,9 +134,11 @@ def test_every_flag_a_hint_names_exists_on_its_sub_command():
 def test_the_walk_catches_a_flag_that_does_not_exist():
     """The checker itself: the issue's stale hints (--marker-map, simulate's --mass) are caught on the real parser."""
     text = ('raise ValueError(f"{p}: names differ; give a mapping, --marker-map, or run hop-impedance simulate '
-            '--mass 60 (bench/x.py --slowest)")\n')
+            '--mass 60 (bench/x.py --slowest); then --out")\n')
     ((_, found),) = list(_texts(ast.parse(text)))
-    assert flags_named(found, "import") == [("import", "--marker-map"), ("simulate", "--mass")]
+    assert flags_named(found, "import") == [("import", "--marker-map"), ("simulate", "--mass"), ("import", "--out")]
+    wrapped = "Not the default (bench/simulator_realism.py\n    --seed-like measures it). Use ``hop-impedance\n    view --rrd``."
+    assert flags_named(wrapped, "*") == [("view", "--rrd")]
     flags = {name: _flags(p) for name, p in _subcommands().items()}
     assert "--marker-map" not in flags["import"] and "--markers" in flags["import"]
     assert "--mass" not in flags["simulate"] and "--mass-kg" in flags["simulate"]  # --mass is a deprecated alias
