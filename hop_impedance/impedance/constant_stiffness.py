@@ -8,15 +8,21 @@ seed notes the moment peak and the angle peak coincide::
     K_overall = (tau[i_max] - tau[0]) / (rho[i_max] - rho0)
 
 Its moment prediction from kinematics is ``tau[0] + K_overall (rho - rho0)``.
+NaN when the joint flexes by 1 mrad or less beyond touchdown (:data:`MIN_FLEXION_CHANGE_RAD`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+#: Smallest angle change (rad) from touchdown to maximal flexion over which an overall stiffness is given.
+#: Choice, one threshold for the per-stance metrics and the fit (issue 20; they were 1e-3 and 0): below
+#: 1 mrad the ratio is mostly noise (2 N m of moment noise over 1 mrad is 2,000 N m/rad).
+MIN_FLEXION_CHANGE_RAD = 1e-3
 
-def overall_stiffness(angle_rad: np.ndarray, moment_nm: np.ndarray) -> float:
-    """Overall joint stiffness (N m/rad) from touchdown to maximal flexion.
+
+def overall_stiffness(angle_rad: np.ndarray, moment_nm: np.ndarray, min_change_rad: float = MIN_FLEXION_CHANGE_RAD) -> float:
+    """Overall joint stiffness (N m/rad) from touchdown to maximal flexion (the seed's Table 2 "overall").
 
     Parameters
     ----------
@@ -24,20 +30,39 @@ def overall_stiffness(angle_rad: np.ndarray, moment_nm: np.ndarray) -> float:
         Joint angle rho (rad), flexion positive; sample 0 is touchdown.
     moment_nm : ndarray, shape (N,)
         Inverse-dynamics moment (N m), extensor positive.
+    min_change_rad : float
+        Angle changes at or below this (rad) give NaN.
 
     Returns
     -------
     float
-        ``(tau[i_max] - tau[0]) / (rho[i_max] - rho[0])``; NaN when the joint
-        never flexes beyond its touchdown angle.
+        ``(tau[i_max] - tau[0]) / (rho[i_max] - rho[0])`` with ``i_max`` the
+        sample of maximal rho; NaN when the joint flexes by ``min_change_rad``
+        or less beyond its touchdown angle.
+    """
+    rho = np.asarray(angle_rad, float)[:, None]
+    return float(overall_stiffness_columns(rho, np.asarray(moment_nm, float)[:, None], min_change_rad)[0])
+
+
+def overall_stiffness_columns(
+    angle_rad: np.ndarray, moment_nm: np.ndarray, min_change_rad: float = MIN_FLEXION_CHANGE_RAD
+) -> np.ndarray:
+    """:func:`overall_stiffness` of J joints at once (the one implementation; N m/rad), shape (J,).
+
+    ``angle_rad`` and ``moment_nm`` have shape (N, J), one joint per column.
+    ``biomech.stance_metrics.overall_joint_stiffness`` (the analysis'
+    per-stance metrics) is this function.
     """
     rho = np.asarray(angle_rad, float)
     tau = np.asarray(moment_nm, float)
-    i_max = int(np.argmax(rho))
-    span = rho[i_max] - rho[0]
-    if span <= 0.0:
-        return float("nan")
-    return float((tau[i_max] - tau[0]) / span)
+    i_max = np.argmax(rho, axis=0)
+    joints = np.arange(rho.shape[1])
+    span = rho[i_max, joints] - rho[0]
+    change = tau[i_max, joints] - tau[0]
+    out = np.full(span.shape, np.nan)
+    ok = span > min_change_rad
+    out[ok] = change[ok] / span[ok]
+    return out
 
 
 def constant_stiffness_moment(angle_rad: np.ndarray, moment_nm: np.ndarray, stiffness_nm_rad: float) -> np.ndarray:

@@ -68,32 +68,10 @@ class CollinearityDiagnostics:
     correlation_inverse: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def to_json(self) -> dict:
-        """Plain-JSON form (lists and floats; inf/NaN become None)."""
+        """Plain-JSON form (:func:`hop_impedance.io.impedance_json.diagnostics_to_json`)."""
+        from hop_impedance.io.impedance_json import diagnostics_to_json
 
-        def clean(value):
-            arr = np.asarray(value, float)
-            out = np.where(np.isfinite(arr), arr, np.nan).tolist()
-            if isinstance(out, list):
-                return _none_for_nan(out)
-            return None if np.isnan(out) else out
-
-        return {
-            "terms": list(self.terms),
-            "hessian_log10_determinant": clean(self.hessian_log10_determinant),
-            "hessian_eigenvalue_ratio": clean(self.hessian_eigenvalue_ratio),
-            "correlation_matrix": clean(self.correlation_matrix),
-            "correlation_determinant": clean(self.correlation_determinant),
-            "correlation_eigenvalue_ratio": clean(self.correlation_eigenvalue_ratio),
-            "variance_inflation_factors": dict(
-                zip(self.terms, clean(self.variance_inflation_factors))
-            ),
-        }
-
-
-def _none_for_nan(values):
-    if isinstance(values, list):
-        return [_none_for_nan(v) for v in values]
-    return None if values != values else values
+        return diagnostics_to_json(self)
 
 
 def _eigenvalue_ratio(symmetric: np.ndarray) -> float:

@@ -44,14 +44,16 @@ SSE (e.g. constrained fits); the tests show both paths end in the same terms.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import special
 
+from hop_impedance.impedance.constraints import constraint_rows
 from hop_impedance.impedance.diagnostics import CollinearityDiagnostics
-from hop_impedance.impedance.regression_model import TERM_NAMES
+from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares, QpSolution
+from hop_impedance.impedance.regression_model import TERM_NAMES, StanceProblem, parameter_indices
 
 #: Terms that must be eliminated before a term may be tested (polynomial hierarchy).
 HIGHER_ORDER_TERMS: dict[str, tuple[str, ...]] = {
@@ -76,8 +78,8 @@ class EliminationStep:
         Removed term.
     reason : str
         ``"not significant"``, ``"collinear"`` or ``"singular"``; after the
-        constrained fit, ``fit_joint_stance`` may add ``"held at zero by the
-        constraints"`` (p = 1, F = 0, vif NaN).
+        constrained fit, :func:`drop_terms_held_at_zero` may add ``"held at
+        zero by the constraints"`` (p = 1, F = 0, vif NaN).
     p_value, f_statistic : float
         Partial F-test of the term in the model it was removed from.
     vif : float
@@ -330,159 +332,348 @@ def _correlation_matrix(columns: np.ndarray) -> np.ndarray:
     return Z.T @ Z
 
 
-def reduce_model(
-    term_columns: np.ndarray,
-    moment_nm: np.ndarray,
-    terms: Sequence[str] = TERM_NAMES,
-    alpha: float = 0.05,
-    vif_limit: float = 10.0,
-    autocorrelation_correction: bool = True,
-    intercept: np.ndarray | None = None,
-    sse_function: Callable[[tuple[str, ...]], float] | None = None,
-    effective_samples: float | None = None,
-    familywise: bool = False,
-    diagnostics: CollinearityDiagnostics | None = None,
-) -> ReductionResult:
-    """Backward elimination of Eq. 3 terms by partial F-tests.
+@dataclass(frozen=True)
+class EliminationSettings:
+    """Rules of :func:`reduce_model`'s backward elimination.
 
-    Parameters
+    Attributes
     ----------
-    term_columns : ndarray, shape (N, len(terms))
-        Moment regressor column of each term (N m per coefficient unit), from
-        ``StanceRegressors.moment_rows``.
-    moment_nm : ndarray, shape (N,)
-        Measured (inverse-dynamics) joint moment tau (N m).
-    terms : sequence of str
-        Names of the columns, a subset of :data:`TERM_NAMES`.
     alpha : float
-        Significance level of the F-tests (default 0.05).
+        Significance level of the F-tests, in (0, 1).
     vif_limit : float
         VIF above which a non-significant term counts as collinear ("offending").
     autocorrelation_correction : bool
         Use the effective sample count (module docstring) in the F-tests.
-    intercept : ndarray, shape (N,), optional
-        Always-kept column (default: ones, the touchdown moment m0).
-    sse_function : callable, optional
-        ``sse_function(kept_terms) -> SSE`` to test with another fit (e.g. the
-        constrained OSQP fit) instead of OLS; slower (one fit per candidate).
-    effective_samples : float, optional
-        n_eff of the tests (clipped to [1, N]); estimated from the residual
-        autocorrelation of the full OLS model when None.
     familywise : bool
         Test at alpha / (number of eligible terms) (Bonferroni) per step.
-    diagnostics : CollinearityDiagnostics, optional
-        ``collinearity_diagnostics(term_columns, terms)`` of the same columns:
-        its correlation matrix and inverse are reused for the VIFs instead of
-        being computed again (same numbers).
+    """
+
+    alpha: float = 0.05
+    vif_limit: float = 10.0
+    autocorrelation_correction: bool = True
+    familywise: bool = False
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.alpha < 1.0:
+            raise ValueError(f"alpha must be in (0, 1), got {self.alpha}")
+
+
+def partial_f_statistic(sse_with: float, sse_without: float, n: int, p: int) -> float:
+    """Partial F statistic of one term: ``F = ((SSE_without - SSE_with) / 1) / (SSE_with / (n - p))``.
+
+    Parameters
+    ----------
+    sse_with, sse_without : float
+        SSE (N^2 m^2) of the model with its p parameters and of the model
+        without the tested term.
+    n : int
+        Samples.
+    p : int
+        Parameters of the model with the term (intercept included).
 
     Returns
     -------
-    ReductionResult
+    float
+        F on (1, n - p) degrees of freedom (for OLS fits equal to the term's
+        t^2, which :class:`_OlsDowndate` computes without refitting).
     """
-    if not 0.0 < alpha < 1.0:
-        raise ValueError(f"alpha must be in (0, 1), got {alpha}")
+    return (sse_without - sse_with) / max(sse_with / (n - p), 1e-300)
+
+
+def f_test_p_values(f_statistics: list[float], effective_samples: float, n: int, p: int) -> tuple[list[float], list[float]]:
+    """F statistics corrected for serial correlation and their p-values (module docstring, "Serial correlation").
+
+    Parameters
+    ----------
+    f_statistics : list of float
+        Plain partial F of each tested term (n samples).
+    effective_samples : float
+        n_eff.
+    n, p : int
+        Samples and parameters of the model (intercept included).
+
+    Returns
+    -------
+    (f_eff, p_values) : lists of float
+        ``F * n_eff / n`` and its upper tail on (1, n_eff - p) dof (1 when n_eff <= p).
+    """
+    f_eff = [value * effective_samples / n for value in f_statistics]
+    dof = effective_samples - p
+    p_values = special.fdtrc(1.0, dof, f_eff).tolist() if dof > 0 else [1.0] * len(f_eff)
+    return f_eff, p_values
+
+
+class _InverseCorrelation:
+    """VIFs of the terms still in the model: one inverse of their correlation matrix, then downdates.
+
+    The inverse is built on first use (taken from the diagnostics of the
+    same columns when they have it) and every removal applies the
+    partitioned-inverse downdate of the OLS path (:func:`_downdate_inverse`).
+    """
+
+    def __init__(self, columns: np.ndarray, n_terms: int, diagnostics: CollinearityDiagnostics | None) -> None:
+        self.columns, self.n_terms, self.diagnostics = columns, n_terms, diagnostics
+        self.matrix: np.ndarray | None = None
+        self.positions: list[int] = []
+
+    def _correlation(self) -> np.ndarray:
+        given = self.diagnostics
+        if given is not None and np.isfinite(given.correlation_matrix).all():
+            return given.correlation_matrix
+        return _correlation_matrix(self.columns)
+
+    def vifs(self, active: list[int]) -> dict[int, float]:
+        """VIF of each active term position (inf for all when their correlation matrix is singular)."""
+        if self.matrix is None:
+            given = self.diagnostics
+            if given is not None and given.correlation_inverse is not None and len(active) == self.n_terms:
+                self.matrix = given.correlation_inverse  # never modified: downdates make new arrays
+            else:
+                try:
+                    self.matrix = np.linalg.inv(self._correlation()[active][:, active])
+                except np.linalg.LinAlgError:
+                    return dict.fromkeys(active, math.inf)
+            self.positions = list(active)
+        return dict(zip(self.positions, self.matrix.diagonal().tolist()))
+
+    def remove(self, position: int) -> None:
+        """Drop a term position (nothing to do before the first :meth:`vifs`)."""
+        if self.matrix is not None:
+            self.matrix = _downdate_inverse(self.matrix, self.positions.index(position))
+
+
+@dataclass
+class _Elimination:
+    """State of one backward elimination: the terms left, their OLS path and their latest F-tests."""
+
+    terms: tuple[str, ...]
+    active: list[int]
+    ols: _OlsDowndate | None
+    ols_column: dict[int, int]
+    n: int
+    effective_samples: float
+    sse_function: Callable[[tuple[str, ...]], float] | None
+    f_eff: dict[int, float] = field(default_factory=dict)
+    p_values: dict[int, float] = field(default_factory=dict)
+
+    def test(self) -> None:
+        """Partial F-test of every active term (n_eff-corrected F and p-value)."""
+        if not self.active:
+            self.f_eff, self.p_values = {}, {}
+            return
+        p = len(self.active) + 1
+        if self.sse_function is not None:
+            names = tuple(self.terms[i] for i in self.active)
+            sse_full = self.sse_function(names)
+            f = [partial_f_statistic(sse_full, self.sse_function(tuple(o for o in names if o != name)), self.n, p)
+                 for name in names]
+        elif self.ols is not None:  # None only when no term is left (returned above)
+            f = self.ols.t_squared()[1:]
+        f_eff, p_values = f_test_p_values(f, self.effective_samples, self.n, p)
+        self.f_eff, self.p_values = dict(zip(self.active, f_eff)), dict(zip(self.active, p_values))
+
+    def remove(self, position: int) -> None:
+        """Drop a term position from the model (and from its OLS path)."""
+        if self.sse_function is None and self.ols is not None:
+            self.ols.remove(self.ols_column[position])
+        self.active.remove(position)
+
+
+def _candidates(state: _Elimination, higher: list[frozenset], alpha: float, familywise: bool) -> list[int]:
+    """Term positions that may be removed now: eligible under the hierarchy and not significant."""
+    eligible = [i for i in state.active if higher[i].isdisjoint(state.active)]
+    level = alpha / len(eligible) if familywise else alpha
+    return [i for i in eligible if state.p_values[i] > level]
+
+
+def _next_removal(candidates: list[int], f_eff: dict[int, float], vif: dict[int, float], vif_limit: float):
+    """(position, reason) of the term to remove: the collinear candidate with the smallest partial F, else any candidate's.
+
+    Smallest partial F = smallest loss of fit (equal to the largest p when
+    the test has degrees of freedom; still defined when n_eff <= p).
+    """
+    collinear = [i for i in candidates if vif[i] > vif_limit]
+    if collinear:
+        return min(collinear, key=f_eff.__getitem__), "collinear"
+    return min(candidates, key=f_eff.__getitem__), "not significant"
+
+
+@dataclass
+class _StartingModel:
+    """The full-rank model the elimination starts from (after any ``"singular"`` removals).
+
+    ``ols`` is None only when no term is left; ``positions`` are the term
+    positions in it; ``design`` its (N, 1 + len(positions)) design.
+    """
+
+    ols: _OlsDowndate | None
+    positions: list[int]
+    steps: list[EliminationStep]
+    design: np.ndarray
+
+    @classmethod
+    def of(cls, design: np.ndarray, y: np.ndarray, terms: tuple[str, ...]) -> _StartingModel:
+        """OLS of ``design`` when full rank, else of what is left after removing exactly collinear terms."""
+        ols = _certainly_full_rank_ols(design, y)
+        if ols is not None:
+            return cls(ols, list(range(len(terms))), [], design)
+        active, steps, start_design, scaled = _drop_exactly_collinear(design, terms)
+        ols = _OlsDowndate(scaled, y, np.linalg.norm(start_design, axis=0)) if active else None
+        return cls(ols, active, steps, start_design)
+
+    def effective_samples(self, given: float | None, correction: bool, y: np.ndarray) -> float:
+        """n_eff of the F-tests: ``given`` clipped to [1, n], else from this model's OLS residual (or n)."""
+        n = y.size
+        if given is not None:
+            return float(np.clip(given, 1.0, n))
+        if correction and self.positions and self.ols is not None:
+            beta = self.ols.beta / self.ols.norms  # unscaled OLS coefficients
+            return effective_sample_count(y - self.design @ beta, minimum=len(self.positions) + 3.0)
+        return float(n)
+
+
+def reduce_model(
+    term_columns: np.ndarray,
+    moment_nm: np.ndarray,
+    terms: Sequence[str] = TERM_NAMES,
+    settings: EliminationSettings = EliminationSettings(),
+    *,
+    effective_samples: float | None = None,
+    diagnostics: CollinearityDiagnostics | None = None,
+    sse_function: Callable[[tuple[str, ...]], float] | None = None,
+) -> ReductionResult:
+    """Backward elimination of Eq. 3 terms by partial F-tests (module docstring).
+
+    Parameters
+    ----------
+    term_columns : ndarray, shape (N, len(terms))
+        Moment regressor column of each term (N m per coefficient unit), e.g.
+        from ``StanceRegressors.moment_rows``; an intercept (ones, the
+        touchdown moment m0) is always kept.
+    moment_nm : ndarray, shape (N,)
+        Measured joint moment tau (N m).
+    terms : sequence of str
+        Names of the columns, a subset of :data:`TERM_NAMES`.
+    settings : EliminationSettings
+    effective_samples : float, optional
+        n_eff of the tests (clipped to [1, N]); else estimated from the full
+        OLS model's residual autocorrelation.
+    diagnostics : CollinearityDiagnostics, optional
+        ``collinearity_diagnostics(term_columns, terms)``: its correlation
+        matrix and inverse are reused for the VIFs (same numbers).
+    sse_function : callable, optional
+        ``sse_function(kept_terms) -> SSE`` to test with another fit (e.g.
+        constrained OSQP fits) instead of OLS; one fit per candidate.
+    """
     terms = tuple(terms)
     columns = np.asarray(term_columns, float)
     y = np.asarray(moment_nm, float)
-    n = y.size
-    ones = np.ones(n) if intercept is None else np.asarray(intercept, float)
-    design = np.empty((n, 1 + len(terms)))  # C order whatever the layout of term_columns
-    design[:, 0], design[:, 1:] = ones, columns
-    ols = _certainly_full_rank_ols(design, y)
-    if ols is not None:
-        active_positions, steps, start_design = list(range(len(terms))), [], design
-    else:
-        active_positions, steps, start_design, scaled = _drop_exactly_collinear(design, terms)
-        ols = _OlsDowndate(scaled, y, np.linalg.norm(start_design, axis=0)) if active_positions else None
-    active = list(active_positions)  # term positions still in the model, in term order
-    # design column of each term position in the OLS object (after any singular removals)
-    ols_column = {position: k + 1 for k, position in enumerate(active_positions)}
-    n_eff = float(n)
-    if effective_samples is not None:
-        n_eff = float(np.clip(effective_samples, 1.0, n))
-    elif autocorrelation_correction and active:
-        beta = ols.beta / ols.norms  # unscaled OLS coefficients
-        n_eff = effective_sample_count(y - start_design @ beta, minimum=len(active) + 3.0)
-
-    def partial_tests() -> tuple[dict[int, float], dict[int, float]]:
-        """F (n_eff-corrected) and p-value of each active term position."""
-        dof = n_eff - (len(active) + 1)
-        if sse_function is None:
-            f = ols.t_squared()[1:]
-        else:
-            names = tuple(terms[i] for i in active)
-            sse_full = sse_function(names)
-            f = [
-                (sse_function(tuple(other for other in names if other != name)) - sse_full)
-                / max(sse_full / (n - len(names) - 1), 1e-300)
-                for name in names
-            ]
-        f_eff = [value * n_eff / n for value in f]
-        p_values = special.fdtrc(1.0, dof, f_eff).tolist() if dof > 0 else [1.0] * len(f)
-        return dict(zip(active, f_eff)), dict(zip(active, p_values))
-
-    # Inverse correlation matrix of the active terms: one inverse, then the
-    # same partitioned-inverse downdate as the OLS path per removed term.
-    inverse: dict = {"matrix": None, "positions": None, "correlation": None}
-
-    def vifs() -> dict[int, float]:
-        """VIF of each active term position."""
-        if inverse["matrix"] is None:
-            given = diagnostics
-            if given is not None and given.correlation_inverse is not None and len(active) == len(terms):
-                inverse["matrix"] = given.correlation_inverse  # never modified: downdates make new arrays
-            else:
-                if inverse["correlation"] is None:
-                    inverse["correlation"] = (
-                        given.correlation_matrix
-                        if given is not None and np.isfinite(given.correlation_matrix).all()
-                        else _correlation_matrix(columns)
-                    )
-                try:
-                    inverse["matrix"] = np.linalg.inv(inverse["correlation"][active][:, active])
-                except np.linalg.LinAlgError:
-                    return dict.fromkeys(active, math.inf)
-            inverse["positions"] = list(active)
-        return dict(zip(inverse["positions"], inverse["matrix"].diagonal().tolist()))
-
+    design = np.empty((y.size, 1 + len(terms)))  # C order whatever the layout of term_columns
+    design[:, 0], design[:, 1:] = 1.0, columns
+    start = _StartingModel.of(design, y, terms)
+    steps = start.steps
+    n_eff = start.effective_samples(effective_samples, settings.autocorrelation_correction, y)
+    state = _Elimination(terms, list(start.positions), start.ols, {pos: k + 1 for k, pos in enumerate(start.positions)},
+                         y.size, n_eff, sse_function)
+    inverse = _InverseCorrelation(columns, len(terms), diagnostics)
     position = {name: i for i, name in enumerate(terms)}
     higher = [frozenset(position[h] for h in HIGHER_ORDER_TERMS[name] if h in position) for name in terms]
-    f_eff, p_values = partial_tests() if active else ({}, {})
-    while active:
-        eligible = [i for i in active if higher[i].isdisjoint(active)]
-        level = alpha / len(eligible) if familywise else alpha
-        candidates = [i for i in eligible if p_values[i] > level]
+    state.test()
+    while state.active:
+        candidates = _candidates(state, higher, settings.alpha, settings.familywise)
         if not candidates:
             break
-        vif = vifs()
-        collinear = [i for i in candidates if vif[i] > vif_limit]
-        # Smallest partial F = smallest loss of fit (equal to the largest p when
-        # the test has degrees of freedom; still defined when n_eff <= p).
-        if collinear:
-            worst = min(collinear, key=f_eff.__getitem__)
-            reason = "collinear"
-        else:
-            worst = min(candidates, key=f_eff.__getitem__)
-            reason = "not significant"
-        steps.append(EliminationStep(terms[worst], reason, p_values[worst], f_eff[worst], float(vif[worst])))
-        if sse_function is None:
-            ols.remove(ols_column[worst])
-        if inverse["matrix"] is not None:
-            inverse["matrix"] = _downdate_inverse(inverse["matrix"], inverse["positions"].index(worst))
-        active.remove(worst)
-        f_eff, p_values = partial_tests() if active else ({}, {})
+        vif = inverse.vifs(state.active)
+        worst, reason = _next_removal(candidates, state.f_eff, vif, settings.vif_limit)
+        steps.append(EliminationStep(terms[worst], reason, state.p_values[worst], state.f_eff[worst], float(vif[worst])))
+        state.remove(worst)
+        inverse.remove(worst)
+        state.test()
+    return _reduction_result(state, position, steps, settings.alpha)
 
-    kept = tuple(t for t in TERM_NAMES if t in position and position[t] in active)
+
+def _reduction_result(state: _Elimination, position: dict[str, int], steps: list, alpha: float) -> ReductionResult:
+    kept = tuple(t for t in TERM_NAMES if t in position and position[t] in state.active)
+    factors = None
+    if state.sse_function is None and state.ols is not None:
+        factors = state.ols.variance_factors([0] + [state.ols_column[position[t]] for t in kept])
     return ReductionResult(
         terms=kept,
-        p_values={t: p_values[position[t]] for t in kept},
-        f_statistics={t: f_eff[position[t]] for t in kept},
+        p_values={t: state.p_values[position[t]] for t in kept},
+        f_statistics={t: state.f_eff[position[t]] for t in kept},
         steps=tuple(steps),
-        effective_samples=n_eff,
+        effective_samples=state.effective_samples,
         alpha=alpha,
-        ols_variance_factors=(
-            ols.variance_factors([0] + [ols_column[position[t]] for t in kept])
-            if sse_function is None and ols is not None
-            else None
-        ),
+        ols_variance_factors=factors,
     )
+
+
+# -- the second elimination rule: after the constrained fit ----------------------------------------------------
+#: Reason of an :class:`EliminationStep` that removes a term the constraints hold at zero.
+HELD_AT_ZERO = "held at zero by the constraints"
+#: A term's largest moment contribution, relative to the largest |moment|, below which it counts as zero.
+_ZERO_CONTRIBUTION = 1e-7
+
+
+def terms_held_at_zero(problem: StanceProblem, terms: tuple[str, ...], coefficients: np.ndarray) -> list[str]:
+    """Kept terms whose constrained coefficient contributes nothing to the moment, removable under the hierarchy.
+
+    A term counts as held at zero when ``|coefficient| * max|column|`` is at
+    most 1e-7 of the largest |moment| (N m) in the fit window.
+    """
+    scale = float(np.max(np.abs(problem.moment_nm))) or 1.0
+    X = problem.design(terms)
+    contribution = np.abs(coefficients[1:]) * np.max(np.abs(X[:, 1:]), axis=0)
+    return [
+        name
+        for name, c in zip(terms, contribution)
+        if c <= _ZERO_CONTRIBUTION * scale and not any(h in terms for h in HIGHER_ORDER_TERMS[name])
+    ]
+
+
+def drop_terms_held_at_zero(
+    problem: StanceProblem, reduction: ReductionResult, solver: ConstrainedLeastSquares, solution: QpSolution
+) -> tuple[ReductionResult, QpSolution]:
+    """Remove reduced-model terms that the constraints (Eqs. 7-9) hold at zero; refit each time.
+
+    Why a second rule next to :func:`reduce_model`: the F-tests run on the
+    unconstrained (OLS) fit, because nested OLS fits cost one QR per stance
+    where constrained ones cost one QP per candidate. When muscles put
+    energy in during stance (a push-off), the OLS damping is significantly
+    *negative*; the F-test keeps it and the constraint B >= 0 then holds it
+    at exactly 0. In the constrained fit such a term contributes nothing:
+    removing it leaves the constrained SSE unchanged, i.e. its partial F
+    (:func:`partial_f_statistic` on constrained SSEs) is 0 and p = 1. This
+    rule is that F-test, run on the constrained fit only for the terms where
+    its answer is known in advance. Removed one at a time, last-eligible
+    first under the polynomial hierarchy, as long as the refit's SSE stays
+    the same (1e-6 relative) and a stiffness term remains; each removal is
+    an :class:`EliminationStep` with reason :data:`HELD_AT_ZERO` (p = 1, F = 0).
+
+    Returns
+    -------
+    (reduction, solution) after the removals (the given ones when none).
+    """
+    while True:
+        terms = reduction.terms
+        held = terms_held_at_zero(problem, terms, solution.coefficients)
+        if not held:
+            return reduction, solution
+        term = held[-1]
+        remaining = tuple(t for t in terms if t != term)
+        if not any(t.startswith("k") for t in remaining):
+            return reduction, solution
+        columns = parameter_indices(remaining)
+        A, _ = constraint_rows(problem.regressors, columns)
+        refit = solver.solve(problem.moment_rows[:, columns], problem.moment_nm, A)
+        if not refit.converged or refit.sse > solution.sse * (1.0 + 1e-6) + 1e-12:
+            return reduction, solution
+        reduction = replace(
+            reduction,
+            terms=remaining,
+            steps=reduction.steps + (EliminationStep(term, HELD_AT_ZERO, 1.0, 0.0, float("nan")),),
+            p_values={k: v for k, v in reduction.p_values.items() if k != term},
+            f_statistics={k: v for k, v in reduction.f_statistics.items() if k != term},
+            ols_variance_factors=None,
+        )
+        solution = refit

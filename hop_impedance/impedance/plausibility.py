@@ -36,10 +36,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hop_impedance.impedance.synthetic import TABLE2_COEFFICIENTS
+from hop_impedance.seed_tables import FREQUENCIES_HZ, SUBJECT_MASS_KG, eq10_k0_k1, nearest_frequency_hz
 
-#: Mean body mass of the seed's subjects (kg): "body mass 54.8 (SD, 4.8) kg".
-SEED_BODY_MASS_KG = 54.8
+#: Mean body mass of the seed's subjects (kg): "body mass 54.8 (SD, 4.8) kg" (:mod:`hop_impedance.seed_tables`).
+SEED_BODY_MASS_KG = SUBJECT_MASS_KG
 
 
 @dataclass(frozen=True)
@@ -52,14 +52,16 @@ class PlausibilityBounds:
     damping_tolerance: float = 2.0
 
 
-def table2_band(joint: str, hop_frequency_hz: float | None, body_mass_kg: float, bounds: PlausibilityBounds) -> tuple[float, float, float]:
+def table2_band(
+    joint: str, hop_frequency_hz: float | None, body_mass_kg: float, bounds: PlausibilityBounds
+) -> tuple[float, float, float]:
     """``(k0_low, k0_high, k1_max)`` in N m/rad for ``joint``, mass-scaled (module docstring)."""
     scale = body_mass_kg / SEED_BODY_MASS_KG
-    rows = sorted(TABLE2_COEFFICIENTS)
+    rows = list(FREQUENCIES_HZ)
     if hop_frequency_hz is not None and math.isfinite(hop_frequency_hz):
-        rows = [min(rows, key=lambda f: abs(f - hop_frequency_hz))]
-    k0 = [TABLE2_COEFFICIENTS[f][joint][0] * scale for f in rows]
-    k1 = [TABLE2_COEFFICIENTS[f][joint][1] * scale for f in rows]
+        rows = [nearest_frequency_hz(hop_frequency_hz)]
+    k0 = [eq10_k0_k1(f, joint)[0] * scale for f in rows]
+    k1 = [eq10_k0_k1(f, joint)[1] * scale for f in rows]
     return min(k0) / bounds.k0_factor, max(k0) * bounds.k0_factor, max(k1) * bounds.k1_factor
 
 

@@ -118,11 +118,13 @@ def fit_stance_joints(
     """
     options = options or default_fit_options()
     reason = _stance_reason(stance)
-    if reason is not None:
+    series = stance.joints
+    if reason is not None or series is None:
+        reason = reason or "no joint data for this stance"
         return {name: JointImpedanceFit(status="rejected", rejection_reason=reason) for name in joints}
     fits = {}
     for name in joints:
-        data = stance.joints.joint(name)
+        data = series.joint(name)
         solver = None
         if solvers is not None:
             solver = solvers.setdefault(name, ConstrainedLeastSquares(eps=options.osqp_eps))
@@ -160,8 +162,10 @@ class TrialStructure:
     reason: str = ""
 
     def to_json(self) -> dict:
-        """Plain JSON types."""
-        return {"terms": list(self.terms), "kept_in": dict(self.kept_in), "stances": self.stances, "reason": self.reason}
+        """Plain JSON types (:func:`hop_impedance.io.impedance_json.structure_to_json`)."""
+        from hop_impedance.io.impedance_json import structure_to_json
+
+        return structure_to_json(self)
 
 
 def given_structure(terms: tuple[str, ...] | list[str], why: str = "given") -> TrialStructure:
@@ -263,8 +267,10 @@ def fit_structured(
     """One stance fitted with each joint's given structure (no reduction)."""
     out = {}
     for joint in JOINT_NAMES:
-        key = None if solvers is None else f"{joint} {' '.join(structures[joint].terms)}"
-        sub = None if solvers is None else {joint: solvers.setdefault(key, ConstrainedLeastSquares(eps=options.osqp_eps))}
+        sub = None
+        if solvers is not None:  # one workspace per joint and structure, shared by the trial's stances
+            key = f"{joint} {' '.join(structures[joint].terms)}"
+            sub = {joint: solvers.setdefault(key, ConstrainedLeastSquares(eps=options.osqp_eps))}
         out[joint] = _fit_one_joint(stance, joint, structured_options(options, structures[joint]), sub)
     return out
 

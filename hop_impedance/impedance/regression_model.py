@@ -307,6 +307,52 @@ def stance_regressors(
     )
 
 
+@dataclass(frozen=True)
+class StanceProblem:
+    """One joint in one stance as the fit sees it: the regressors and what enters Eq. 6.
+
+    Attributes
+    ----------
+    regressors : StanceRegressors
+        Rows of Eqs. 3-9 at every sample from touchdown (the constraints hold at all of them).
+    window : ndarray of bool, shape (N,)
+        Samples entering the objective (Eq. 6), the F-tests and the fit errors.
+    moment_rows : ndarray, shape (n, 9)
+        ``regressors.moment_rows`` in the window: every candidate model takes a column subset.
+    moment_nm : ndarray, shape (n,)
+        Measured moment tau (N m) in the window.
+    time_s : ndarray, shape (n,)
+        Sample instants (s) in the window.
+    """
+
+    regressors: StanceRegressors
+    window: np.ndarray
+    moment_rows: np.ndarray
+    moment_nm: np.ndarray
+    time_s: np.ndarray
+
+    def in_window(self, values: np.ndarray) -> np.ndarray:
+        """``values[window]`` (the array itself when the window is the whole stance)."""
+        return values if self.window.all() else values[self.window]
+
+    def design(self, terms: tuple[str, ...]) -> np.ndarray:
+        """Moment rows X (n, 1 + len(terms)) of the intercept and ``terms`` in the window."""
+        return self.moment_rows[:, parameter_indices(terms)]
+
+
+def stance_problem(
+    time_s: np.ndarray, angle_rad: np.ndarray, angular_velocity_rad_s: np.ndarray, moment_nm: np.ndarray,
+    window: np.ndarray,
+) -> StanceProblem:
+    """Regressors of one stance (:func:`stance_regressors`) and the rows and moment of its fit ``window`` (bool, (N,))."""
+    regressors = stance_regressors(time_s, angle_rad, angular_velocity_rad_s)
+    whole = bool(window.all())  # the default: nothing excluded, no windowed copies needed
+    def pick(values):
+        return values if whole else values[window]
+    return StanceProblem(regressors, window, pick(regressors.moment_rows), pick(np.asarray(moment_nm, float)),
+                         pick(regressors.time_s))
+
+
 def parameter_indices(terms: tuple[str, ...] | list[str]) -> np.ndarray:
     """Column indices (into :data:`PARAMETER_NAMES`) of the intercept plus ``terms``.
 

@@ -1,20 +1,39 @@
 """One call per joint per stance: reduce, fit (OSQP), compare with constant stiffness.
 
-Pipeline of :func:`fit_joint_stance`:
+:func:`fit_joint_stance` is these steps in order, each a named function
+(the equations are the seed paper's, ../shared/seeds/000_*.txt):
 
-1. validate the stance (finite samples, increasing time, enough samples and
-   duration, a non-flat angle trajectory); failures give ``status="rejected"``
-   and a ``rejection_reason``, never an exception;
-2. regressors of Eqs. 3-5 and multicollinearity diagnostics of the full model;
-3. F-test elimination of terms (OLS path, :mod:`model_reduction`);
-4. one constrained fit of the reduced model under Eqs. 7-9 with OSQP; any
-   OSQP status other than ``solved`` rejects the stance;
-5. standard errors and p-values of the surviving terms from the OLS covariance
-   ``sigma^2 (X^T X)^-1`` at the constrained solution (approximate when a
-   constraint is active), inflated by n / n_eff for serial correlation,
-   t-test with n_eff - p degrees of freedom;
-6. K(t), B(t), moment fit, RMSE, R^2, SSE of the variable and of the constant
+1. :func:`validate_stance`: finite samples, increasing time, enough samples
+   and duration, a non-flat angle trajectory; failures give
+   ``status="rejected"`` and a ``rejection_reason``, never an exception;
+2. :func:`~hop_impedance.impedance.regression_model.stance_problem`: the
+   regressors of Eqs. 3-5 (``stiffness_regressors``, ``damping_regressors``,
+   ``spring_moment_regressors``, ``damper_moment_regressors``,
+   ``joint_moment_regressors``) and the fit window;
+3. :func:`select_model`: multicollinearity diagnostics of the full model
+   (:func:`~hop_impedance.impedance.diagnostics.collinearity_diagnostics`)
+   and F-test elimination of terms on the OLS path
+   (:func:`~hop_impedance.impedance.model_reduction.reduce_model`, its F
+   statistic :func:`~hop_impedance.impedance.model_reduction.partial_f_statistic`);
+4. :func:`constrained_fit`: one fit of Eq. 6
+   (:func:`~hop_impedance.impedance.qp_fit.least_squares_objective`) under
+   Eqs. 7-9 (:mod:`~hop_impedance.impedance.constraints`) with OSQP; any
+   OSQP status other than ``solved`` rejects the stance; then
+   :func:`~hop_impedance.impedance.model_reduction.drop_terms_held_at_zero`
+   removes terms the constraints hold at zero (the F-test on the
+   constrained fit where its answer, F = 0, is known);
+5. :func:`coefficient_inference`: standard errors and p-values of the
+   surviving terms from the OLS covariance ``sigma^2 (X^T X)^-1`` at the
+   constrained solution (approximate when a constraint is active), inflated
+   by n / n_eff for serial correlation, t-test with n_eff - p degrees of
+   freedom;
+6. :func:`fit_result`: K(t), B(t), moment fit, RMSE, R^2, SSE of the
+   variable and (:func:`constant_stiffness_comparison`) of the constant
    (overall) stiffness model, average stiffness.
+
+The result is a :class:`JointImpedanceFit` dataclass; its JSON form is made
+in :mod:`hop_impedance.io.impedance_json` (``fit_to_json`` is re-exported
+here for existing callers).
 """
 
 from __future__ import annotations
@@ -32,36 +51,22 @@ from hop_impedance.impedance.constant_stiffness import (
 )
 from hop_impedance.impedance.constraints import constraint_rows
 from hop_impedance.impedance.diagnostics import CollinearityDiagnostics, collinearity_diagnostics
-from hop_impedance.impedance.model_reduction import HIGHER_ORDER_TERMS, EliminationStep, ReductionResult, reduce_model
-from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares
+from hop_impedance.impedance.model_reduction import (
+    EliminationSettings,
+    ReductionResult,
+    drop_terms_held_at_zero,
+    reduce_model,
+)
+from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares, QpSolution
 from hop_impedance.impedance.regression_model import (
     INTERCEPT_NAME,
     PARAMETER_NAMES,
     TERM_NAMES,
+    StanceProblem,
     parameter_indices,
-    stance_regressors,
+    stance_problem,
 )
-
-#: Keys of the per-joint ``fit`` object in ``hop-impedance analyze`` JSON.
-FIT_JSON_KEYS: tuple[str, ...] = (
-    "terms",
-    "coefficients",
-    "std_errors",
-    "p_values",
-    "rho0",
-    "omega0",
-    "stiffness",
-    "damping",
-    "moment_fit",
-    "rmse",
-    "r_squared",
-    "sse_variable",
-    "sse_constant",
-    "overall_stiffness",
-    "average_stiffness",
-    "status",
-    "rejection_reason",
-)
+from hop_impedance.io.impedance_json import FIT_JSON_KEYS, fit_to_json  # re-exported: JSON is made in io/
 
 
 @dataclass(frozen=True)
@@ -271,58 +276,169 @@ def _standard_errors(X: np.ndarray, sse: float, n_eff: float, variance_factors: 
     return np.sqrt(np.maximum(np.diag(cov_s), 0.0) * sigma2 * n / n_eff) / norms
 
 
-#: Reason of an :class:`EliminationStep` that removes a term the constraints hold at zero.
-HELD_AT_ZERO = "held at zero by the constraints"
-#: A term's largest moment contribution, relative to the largest |moment|, below which it counts as zero.
-_ZERO_CONTRIBUTION = 1e-7
+@dataclass(frozen=True)
+class SelectedModel:
+    """The model structure a stance is fitted with, and how it was chosen.
 
-
-def _drop_terms_held_at_zero(terms, moment_rows, tau, regs, solver, solution, reduction):
-    """Remove reduced-model terms that the constraints (Eqs. 7-9) hold at zero; refit.
-
-    The F-tests run on the unconstrained (OLS) fit. When muscles put energy
-    in during stance (a push-off), the OLS damping is significantly
-    *negative*; the F-test keeps it and the constraint B >= 0 then holds it
-    at exactly 0. Such a term contributes nothing to the constrained fit:
-    removing it leaves the constrained SSE unchanged (its constrained partial
-    F is 0, p = 1), so it is removed, one at a time, last-eligible first
-    under the polynomial hierarchy, as long as the refit's SSE stays the
-    same (1e-6 relative) and a stiffness term remains.
-
-    Returns
-    -------
-    (terms, solution, reduction) after the removals (unchanged when none).
+    Attributes
+    ----------
+    terms : tuple of str
+        Eq. 3 terms of the model (the intercept m0 is always fitted).
+    diagnostics : CollinearityDiagnostics
+        Multicollinearity diagnostics of the starting model (``FitOptions.terms``).
+    reduction : ReductionResult or None
+        The F-test elimination (None with ``reduce=False``).
+    effective_samples : float
+        n_eff of the F-tests and standard errors.
     """
-    scale = float(np.max(np.abs(tau))) or 1.0
-    while True:
-        columns = parameter_indices(terms)
-        X = moment_rows[:, columns]
-        contribution = np.abs(solution.coefficients[1:]) * np.max(np.abs(X[:, 1:]), axis=0)
-        held = [
-            name
-            for name, c in zip(terms, contribution)
-            if c <= _ZERO_CONTRIBUTION * scale and not any(h in terms for h in HIGHER_ORDER_TERMS[name])
-        ]
-        if not held:
-            return terms, solution, reduction
-        term = held[-1]
-        remaining = tuple(t for t in terms if t != term)
-        if not any(t.startswith("k") for t in remaining):
-            return terms, solution, reduction
-        new_columns = parameter_indices(remaining)
-        A, _ = constraint_rows(regs, new_columns)
-        refit = solver.solve(moment_rows[:, new_columns], tau, A)
-        if not refit.converged or refit.sse > solution.sse * (1.0 + 1e-6) + 1e-12:
-            return terms, solution, reduction
-        reduction = replace(
-            reduction,
-            terms=remaining,
-            steps=reduction.steps + (EliminationStep(term, HELD_AT_ZERO, 1.0, 0.0, float("nan")),),
-            p_values={k: v for k, v in reduction.p_values.items() if k != term},
-            f_statistics={k: v for k, v in reduction.f_statistics.items() if k != term},
-            ols_variance_factors=None,
+
+    terms: tuple[str, ...]
+    diagnostics: CollinearityDiagnostics
+    reduction: ReductionResult | None
+    effective_samples: float
+
+
+def select_model(problem: StanceProblem, options: FitOptions) -> SelectedModel:
+    """Diagnostics of the starting model and, unless ``reduce=False``, its F-test elimination (:func:`reduce_model`)."""
+    start = tuple(name for name in TERM_NAMES if name in options.terms)
+    columns = problem.design(start)[:, 1:]
+    diagnostics = collinearity_diagnostics(columns, start)
+    n = problem.time_s.size
+    n_eff_given = _effective_samples(float(problem.time_s[-1] - problem.time_s[0]), n, options)
+    if not options.reduce:
+        return SelectedModel(start, diagnostics, None, n_eff_given if n_eff_given is not None else float(n))
+    settings = EliminationSettings(options.alpha, options.vif_limit, options.autocorrelation_correction)
+    reduction = reduce_model(columns, problem.moment_nm, start, settings, effective_samples=n_eff_given,
+                             diagnostics=diagnostics)
+    return SelectedModel(reduction.terms, diagnostics, reduction, reduction.effective_samples)
+
+
+def _unfittable_reason(problem: StanceProblem, model: SelectedModel, options: FitOptions) -> str | None:
+    """Why the selected model cannot be fitted (no stiffness term, a zero regressor), or None."""
+    if not any(name.startswith("k") for name in model.terms):
+        # Nothing spring-like survived the F-tests: publishing a "solved" fit
+        # would present an intercept (or a damper) as this joint's impedance.
+        return f"model reduction kept no stiffness term (none of k0..k3 significant at alpha={options.alpha})"
+    return _zero_regressor_reason(problem.design(model.terms), model.terms)
+
+
+def constrained_fit(problem: StanceProblem, terms: tuple[str, ...], solver: ConstrainedLeastSquares) -> QpSolution:
+    """Eq. 6 minimised under Eqs. 7-9 (OSQP) for the intercept and ``terms``."""
+    columns = parameter_indices(terms)
+    A, _ = constraint_rows(problem.regressors, columns)
+    return solver.solve(problem.moment_rows[:, columns], problem.moment_nm, A)
+
+
+@dataclass(frozen=True)
+class CoefficientInference:
+    """Standard errors and two-sided t-test p-values of the fitted parameters (intercept first), shapes (p,)."""
+
+    std_errors: np.ndarray
+    p_values: np.ndarray
+
+
+def coefficient_inference(problem: StanceProblem, model: SelectedModel, solution: QpSolution) -> CoefficientInference:
+    """Standard errors (:func:`_standard_errors`, n / n_eff inflated) and p-values on n_eff - p dof (module docstring, step 5)."""
+    X = problem.design(model.terms)
+    factors = model.reduction.ols_variance_factors if model.reduction is not None else None
+    se = _standard_errors(X, solution.sse, model.effective_samples, factors)
+    dof = model.effective_samples - X.shape[1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_stat = solution.coefficients / se
+    p_values = 2.0 * special.stdtr(dof, -np.abs(t_stat)) if dof > 0 else np.full(X.shape[1], np.nan)
+    return CoefficientInference(se, p_values)
+
+
+def _model_context(problem: StanceProblem, model: SelectedModel, tau: np.ndarray, rho: np.ndarray) -> dict:
+    """The :class:`JointImpedanceFit` fields known once the model is selected (also on a rejection)."""
+    regs = problem.regressors
+    return dict(time_s=regs.time_s, angle_rad=rho, moment_nm=tau, rho0=regs.rho0_rad, omega0=regs.omega0_rad_s,
+                terms=model.terms, reduction=model.reduction, diagnostics=model.diagnostics,
+                effective_samples=model.effective_samples)
+
+
+def fit_result(problem: StanceProblem, model: SelectedModel, solution: QpSolution, tau: np.ndarray, rho: np.ndarray):
+    """The :class:`JointImpedanceFit` of a solved model: K(t), B(t), moment fit, errors, constant-stiffness comparison.
+
+    ``tau`` and ``rho`` are the whole stance's moment (N m) and angle (rad); errors are over the fit window.
+    """
+    regs = problem.regressors
+    columns = parameter_indices(model.terms)
+    names = [PARAMETER_NAMES[c] for c in columns]
+    theta = np.zeros(len(PARAMETER_NAMES))
+    theta[columns] = solution.coefficients
+    inference = coefficient_inference(problem, model, solution)
+    moment_fit = regs.moment_rows @ theta
+    residual = problem.in_window(tau - moment_fit)
+    sse = float(residual @ residual)  # Eq. 6's J at the solution (from the 9-parameter moment fit)
+    stiffness = regs.stiffness_rows @ theta
+    constant = constant_stiffness_comparison(problem, rho, tau)
+    n, t = problem.time_s.size, regs.time_s
+    frame_rate = (n - 1) / float(problem.time_s[-1] - problem.time_s[0])
+    return JointImpedanceFit(
+        status=solution.status,
+        rejection_reason=None,
+        coefficients={name: float(v) for name, v in zip(names, solution.coefficients)},
+        std_errors={name: float(v) for name, v in zip(names, inference.std_errors)},
+        p_values={name: float(v) for name, v in zip(names, inference.p_values)},
+        stiffness=stiffness,
+        damping=regs.damping_rows @ theta,
+        moment_fit=moment_fit,
+        moment_constant=constant.moment_nm,
+        rmse=math.sqrt(sse / n),
+        r_squared=_r_squared(sse, problem.moment_nm),
+        sse_variable=sse,
+        sse_constant=constant.sse,
+        table3_variable=table3_error(sse, n, frame_rate),
+        table3_constant=table3_error(constant.sse, n, frame_rate),
+        overall_stiffness=constant.stiffness_nm_rad,
+        average_stiffness=float(np.trapezoid(stiffness, t) / (t[-1] - t[0])),
+        solver_iterations=solution.iterations,
+        active_constraints=solution.n_active,
+        **_model_context(problem, model, tau, rho),
+    )
+
+
+def _r_squared(sse: float, moment_nm: np.ndarray) -> float:
+    sst = float(((moment_nm - moment_nm.mean()) ** 2).sum())
+    return 1.0 - sse / sst if sst > 0 else float("nan")
+
+
+@dataclass(frozen=True)
+class ConstantStiffnessFit:
+    """The seed's constant ("overall") stiffness model of one stance (Table 3's comparison).
+
+    Attributes
+    ----------
+    stiffness_nm_rad : float
+        Overall stiffness (N m/rad; NaN when the joint never flexes beyond touchdown).
+    moment_nm : ndarray, shape (N,)
+        Its moment prediction over the whole stance (0 stiffness when NaN).
+    sse : float
+        Its SSE over the fit window (N^2 m^2).
+    """
+
+    stiffness_nm_rad: float
+    moment_nm: np.ndarray
+    sse: float
+
+
+def constant_stiffness_comparison(problem: StanceProblem, rho: np.ndarray, tau: np.ndarray) -> ConstantStiffnessFit:
+    """Overall stiffness, its moment prediction and SSE (:mod:`constant_stiffness`) for the whole-stance ``rho``, ``tau``."""
+    k_overall = overall_stiffness(rho, tau)
+    moment = constant_stiffness_moment(rho, tau, k_overall if math.isfinite(k_overall) else 0.0)
+    return ConstantStiffnessFit(k_overall, moment, float((problem.in_window(tau - moment) ** 2).sum()))
+
+
+def _checked_arrays(*arrays) -> list[np.ndarray]:
+    """The four input series as float arrays; ValueError unless all are 1-D of one length (a caller bug)."""
+    out = [np.asarray(a, float) for a in arrays]
+    if any(a.ndim != 1 or a.shape != out[0].shape for a in out):
+        raise ValueError(
+            "fit_joint_stance: time_s, angle_rad, angular_velocity_rad_s and moment_nm must be 1-D arrays of one length, "
+            f"got shapes {[a.shape for a in out]}"
         )
-        terms, solution = remaining, refit
+    return out
 
 
 def fit_joint_stance(
@@ -333,7 +449,7 @@ def fit_joint_stance(
     options: FitOptions | None = None,
     solver: ConstrainedLeastSquares | None = None,
 ) -> JointImpedanceFit:
-    """Fit the seed's impedance model to one joint during one stance.
+    """Fit the seed's impedance model to one joint during one stance (the steps of the module docstring).
 
     Parameters
     ----------
@@ -362,173 +478,23 @@ def fit_joint_stance(
     """
     options = options or FitOptions()
     solver = solver or ConstrainedLeastSquares(eps=options.osqp_eps)
-    arrays = [np.asarray(a, float) for a in (time_s, angle_rad, angular_velocity_rad_s, moment_nm)]
-    if any(a.ndim != 1 or a.shape != arrays[0].shape for a in arrays):
-        raise ValueError(
-            "fit_joint_stance: time_s, angle_rad, angular_velocity_rad_s and moment_nm must be 1-D arrays of one length, "
-            f"got shapes {[a.shape for a in arrays]}"
-        )
-    t, rho, omega, tau = arrays
-    reason = validate_stance(t, rho, omega, tau, options)
+    t, rho, omega, tau = _checked_arrays(time_s, angle_rad, angular_velocity_rad_s, moment_nm)
+    reason = validate_stance(t, rho, omega, tau, options)  # 1. usable data
     if reason is not None:
         return _rejected(reason, time_s=t, angle_rad=rho, moment_nm=tau)
-
-    regs = stance_regressors(t, rho, omega)
-    window = fit_window(t, options)
-    whole = bool(window.all())  # the default: nothing excluded, no windowed copies needed
-
-    def in_window(values: np.ndarray) -> np.ndarray:
-        return values if whole else values[window]
-
-    tw, tauw = in_window(t), in_window(tau)
-    n = tw.size
-    start = tuple(name for name in TERM_NAMES if name in options.terms)
-    moment_rows = in_window(regs.moment_rows)  # (n, 9): every candidate model takes a column subset
-    full_columns = moment_rows[:, parameter_indices(start)[1:]]
-    diagnostics = collinearity_diagnostics(full_columns, start)
-    n_eff_given = _effective_samples(float(tw[-1] - tw[0]), n, options)
-    if options.reduce:
-        reduction = reduce_model(
-            full_columns,
-            tauw,
-            terms=start,
-            alpha=options.alpha,
-            vif_limit=options.vif_limit,
-            autocorrelation_correction=options.autocorrelation_correction,
-            effective_samples=n_eff_given,
-            diagnostics=diagnostics,
-        )
-        terms = reduction.terms
-        n_eff = reduction.effective_samples
-    else:
-        reduction, terms = None, start
-        n_eff = n_eff_given if n_eff_given is not None else float(n)
-    common = dict(
-        time_s=t,
-        angle_rad=rho,
-        moment_nm=tau,
-        rho0=regs.rho0_rad,
-        omega0=regs.omega0_rad_s,
-        reduction=reduction,
-        diagnostics=diagnostics,
-        effective_samples=n_eff,
-    )
-
-    if not any(name.startswith("k") for name in terms):
-        # Nothing spring-like survived the F-tests: publishing a "solved" fit
-        # would present an intercept (or a damper) as this joint's impedance.
-        return _rejected(
-            f"model reduction kept no stiffness term (none of k0..k3 significant at alpha={options.alpha})",
-            terms=terms,
-            **common,
-        )
-    columns = parameter_indices(terms)
-    X = moment_rows[:, columns]
-    singular = _zero_regressor_reason(X, terms)
-    if singular is not None:
-        return _rejected(singular, terms=terms, **common)
-    A, _ = constraint_rows(regs, columns)
-    solution = solver.solve(X, tauw, A)
+    problem = stance_problem(t, rho, omega, tau, fit_window(t, options))  # 2. Eqs. 3-5 regressors
+    model = select_model(problem, options)  # 2-3. diagnostics, F-test elimination
+    reason = _unfittable_reason(problem, model, options)
+    if reason is not None:
+        return _rejected(reason, **_model_context(problem, model, tau, rho))
+    solution = constrained_fit(problem, model.terms, solver)  # 4. Eq. 6 under Eqs. 7-9
     if not solution.converged:
-        return _rejected(
-            f"OSQP did not converge: status '{solution.status}'", status=solution.status, terms=terms, **common
-        )
-    if reduction is not None:
-        terms, solution, reduction = _drop_terms_held_at_zero(terms, moment_rows, tauw, regs, solver, solution, reduction)
-        common["reduction"] = reduction
-        columns = parameter_indices(terms)
-        X = moment_rows[:, columns]
-
-    theta = np.zeros(len(PARAMETER_NAMES))
-    theta[columns] = solution.coefficients
-    names = [PARAMETER_NAMES[c] for c in columns]
-    se = _standard_errors(X, solution.sse, n_eff, reduction.ols_variance_factors if reduction is not None else None)
-    dof = n_eff - X.shape[1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_stat = solution.coefficients / se
-    p_values = 2.0 * special.stdtr(dof, -np.abs(t_stat)) if dof > 0 else np.full(len(names), np.nan)
-
-    moment_fit = regs.moment_rows @ theta
-    residual = in_window(tau - moment_fit)
-    sse = float(residual @ residual)
-    sst = float(((tauw - tauw.mean()) ** 2).sum())
-    stiffness = regs.stiffness_rows @ theta
-    k_overall = overall_stiffness(rho, tau)
-    moment_constant = constant_stiffness_moment(rho, tau, k_overall if math.isfinite(k_overall) else 0.0)
-    sse_constant = float((in_window(tau - moment_constant) ** 2).sum())
-    frame_rate = (n - 1) / float(tw[-1] - tw[0])
-    return JointImpedanceFit(
-        status=solution.status,
-        rejection_reason=None,
-        terms=terms,
-        coefficients={name: float(v) for name, v in zip(names, solution.coefficients)},
-        std_errors={name: float(v) for name, v in zip(names, se)},
-        p_values={name: float(v) for name, v in zip(names, p_values)},
-        stiffness=stiffness,
-        damping=regs.damping_rows @ theta,
-        moment_fit=moment_fit,
-        moment_constant=moment_constant,
-        rmse=math.sqrt(sse / n),
-        r_squared=1.0 - sse / sst if sst > 0 else float("nan"),
-        sse_variable=sse,
-        sse_constant=sse_constant,
-        table3_variable=table3_error(sse, n, frame_rate),
-        table3_constant=table3_error(sse_constant, n, frame_rate),
-        overall_stiffness=k_overall,
-        average_stiffness=float(np.trapezoid(stiffness, t) / (t[-1] - t[0])),
-        solver_iterations=solution.iterations,
-        active_constraints=solution.n_active,
-        **common,
-    )
-
-
-def _json_float(value: float) -> float | None:
-    value = float(value)
-    return value if math.isfinite(value) else None
-
-
-def fit_to_json(fit: JointImpedanceFit) -> dict:
-    """The ``fit`` object of one joint of one stance, with exactly :data:`FIT_JSON_KEYS`.
-
-    Parameters
-    ----------
-    fit : JointImpedanceFit
-
-    Returns
-    -------
-    dict
-        Plain JSON types. ``coefficients``/``std_errors``/``p_values`` map the
-        intercept ``m0`` (N m) and each kept term to its value (k: N m/rad,
-        k1: N m/rad^2, k2: N m/rad^3, k3: N m s/rad^2, b0: N m s/rad, ...);
-        ``stiffness`` (N m/rad), ``damping`` (N m s/rad) and ``moment_fit``
-        (N m) are sampled at the stance samples; non-finite numbers are None.
-    """
-
-    def mapping(values: dict[str, float]) -> dict[str, float | None]:
-        return {k: _json_float(v) for k, v in values.items()}
-
-    def samples(values: np.ndarray) -> list[float | None]:
-        return [_json_float(v) for v in np.asarray(values, float)]
-
-    return {
-        "terms": list(fit.terms),
-        "coefficients": mapping(fit.coefficients),
-        "std_errors": mapping(fit.std_errors),
-        "p_values": mapping(fit.p_values),
-        "rho0": _json_float(fit.rho0),
-        "omega0": _json_float(fit.omega0),
-        "stiffness": samples(fit.stiffness),
-        "damping": samples(fit.damping),
-        "moment_fit": samples(fit.moment_fit),
-        "rmse": _json_float(fit.rmse),
-        "r_squared": _json_float(fit.r_squared),
-        "sse_variable": _json_float(fit.sse_variable),
-        "sse_constant": _json_float(fit.sse_constant),
-        "overall_stiffness": _json_float(fit.overall_stiffness),
-        "average_stiffness": _json_float(fit.average_stiffness),
-        "status": fit.status,
-        "rejection_reason": fit.rejection_reason,
-    }
+        return _rejected(f"OSQP did not converge: status '{solution.status}'", status=solution.status,
+                         **_model_context(problem, model, tau, rho))
+    if model.reduction is not None:  # 4b. terms the constraints hold at zero
+        reduction, solution = drop_terms_held_at_zero(problem, model.reduction, solver, solution)
+        model = replace(model, terms=reduction.terms, reduction=reduction)
+    return fit_result(problem, model, solution, tau, rho)  # 5-6. inference, K(t), B(t), errors
 
 
 __all__ = [

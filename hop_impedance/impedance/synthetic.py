@@ -29,20 +29,16 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-#: Seed Table 2 (mean values): frequency (Hz) -> joint -> (k0, k1) in N m/rad.
+from hop_impedance.seed_tables import FREQUENCIES_HZ, JOINTS, RANGE_OF_FLEXION_RAD, STANCE_TIME_S, eq10_k0_k1
+
+#: Seed Table 2 (mean values): frequency (Hz) -> joint -> (k0, k1) in N m/rad (:mod:`hop_impedance.seed_tables`).
 TABLE2_COEFFICIENTS: dict[float, dict[str, tuple[float, float]]] = {
-    1.53: {"ankle": (178.5, 193.3), "knee": (110.0, 169.3), "hip": (95.3, 161.8)},
-    1.87: {"ankle": (223.3, 560.8), "knee": (158.8, 541.3), "hip": (139.4, 526.9)},
-    2.20: {"ankle": (301.4, 948.2), "knee": (230.9, 884.8), "hip": (175.4, 894.8)},
+    f: {joint: eq10_k0_k1(f, joint) for joint in JOINTS} for f in FREQUENCIES_HZ
 }
 #: Seed Table 1: frequency (Hz) -> stance time (s).
-TABLE1_STANCE_TIME_S: dict[float, float] = {1.53: 0.458, 1.87: 0.333, 2.20: 0.282}
+TABLE1_STANCE_TIME_S = STANCE_TIME_S
 #: Seed Table 1: frequency (Hz) -> joint -> range of flexion (rad).
-TABLE1_RANGE_OF_FLEXION_RAD: dict[float, dict[str, float]] = {
-    1.53: {"ankle": 0.85, "knee": 0.70, "hip": 0.37},
-    1.87: {"ankle": 0.69, "knee": 0.42, "hip": 0.18},
-    2.20: {"ankle": 0.59, "knee": 0.27, "hip": 0.11},
-}
+TABLE1_RANGE_OF_FLEXION_RAD = RANGE_OF_FLEXION_RAD
 #: Raw (unfiltered) joint-angle noise (rad) from 1 mm marker noise.
 ANGLE_NOISE_RAD: dict[str, float] = {"ankle": 0.010, "knee": 0.005, "hip": 0.005}
 #: Raw joint-moment noise (N m) from 1 mm markers x GRF lever and 2 N force noise.

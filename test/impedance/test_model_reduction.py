@@ -4,15 +4,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import NOISE_BANDWIDTH_HZ
 
 from hop_impedance.impedance.constraints import constraint_rows
 from hop_impedance.impedance.diagnostics import collinearity_diagnostics
-from hop_impedance.impedance.model_reduction import HIGHER_ORDER_TERMS, effective_sample_count, reduce_model
+from hop_impedance.impedance.model_reduction import (
+    HIGHER_ORDER_TERMS,
+    EliminationSettings,
+    effective_sample_count,
+    reduce_model,
+)
 from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares
 from hop_impedance.impedance.regression_model import TERM_NAMES, parameter_indices, stance_regressors
 from hop_impedance.impedance.synthetic import synthetic_stance
-
-from conftest import NOISE_BANDWIDTH_HZ
 
 SEEDS = range(20)
 REDUCED = {("k0", "k1"), ("k0", "k1", "b0")}
@@ -62,7 +66,8 @@ def test_white_noise_iid_test_is_calibrated():
         st = synthetic_stance("ankle", 1.87, rate_hz=200.0)
         noise = np.random.default_rng(seed).normal(0.0, 2.0, st.moment_nm.size)
         r = stance_regressors(st.time_s, st.angle_rad, st.angular_velocity_rad_s)
-        res = reduce_model(r.moment_rows[:, 1:], st.moment_nm + noise, autocorrelation_correction=False)
+        res = reduce_model(r.moment_rows[:, 1:], st.moment_nm + noise,
+                           settings=EliminationSettings(autocorrelation_correction=False))
         assert {"k0", "k1"} <= set(res.terms)
         hits += res.terms in REDUCED
     assert hits >= 26  # >= 65 % of 40
@@ -134,7 +139,7 @@ def test_effective_sample_count_of_white_and_smooth_noise():
 
 def test_alpha_is_validated():
     with pytest.raises(ValueError, match="alpha"):
-        reduce_model(np.ones((10, 1)), np.ones(10), terms=("k0",), alpha=1.5)
+        reduce_model(np.ones((10, 1)), np.ones(10), terms=("k0",), settings=EliminationSettings(alpha=1.5))
 
 
 def test_final_f_statistics_and_variance_factors_equal_a_fresh_ols_of_the_reduced_model():
