@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import cumulative_trapezoid, trapezoid
 
+from hop_impedance.impedance.constant_stiffness import overall_stiffness_columns
 from hop_impedance.recording import GRAVITY_M_S2
 
 
@@ -51,6 +52,9 @@ def joint_work(t_s: np.ndarray, power_w: np.ndarray) -> tuple[np.ndarray, np.nda
 def overall_joint_stiffness(rho_rad: np.ndarray, moment_nm: np.ndarray, min_change_rad: float = 1e-3) -> np.ndarray:
     """Moment change over angle change from touchdown to maximal flexion (N m/rad), shape (J,).
 
+    :func:`hop_impedance.impedance.constant_stiffness.overall_stiffness_columns`
+    (one implementation for these metrics and the fit).
+
     Parameters
     ----------
     rho_rad : ndarray, shape (N, J)
@@ -58,16 +62,7 @@ def overall_joint_stiffness(rho_rad: np.ndarray, moment_nm: np.ndarray, min_chan
     moment_nm : ndarray, shape (N, J)
         Extensor-positive moments (N m).
     """
-    rho = np.asarray(rho_rad, float)
-    m = np.asarray(moment_nm, float)
-    k = np.argmax(rho, axis=0)
-    cols = np.arange(rho.shape[1])
-    d_rho = rho[k, cols] - rho[0]
-    d_m = m[k, cols] - m[0]
-    out = np.full(rho.shape[1], np.nan)
-    ok = d_rho > min_change_rad
-    out[ok] = d_m[ok] / d_rho[ok]
-    return out
+    return overall_stiffness_columns(rho_rad, moment_nm, min_change_rad)
 
 
 def com_displacement_from_grf(t_s: np.ndarray, fz_n: np.ndarray, mass_kg: float) -> np.ndarray:
