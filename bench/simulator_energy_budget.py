@@ -22,7 +22,7 @@ Push-off timing is printed as fractions of the actual stance: onset, peak and
 end of the sin^2 pulse, and the instant of maximal ankle flexion.
 
 Usage: .venv/bin/python bench/simulator_energy_budget.py [--hops 5] [--freqs 1.53,1.87,2.2]
-       [--flights prescribed,energy_keeping] [--trunk K] [--write] [--lossless]
+       [--flights prescribed,energy_keeping] [--trunk K] [--write] [--lossless [--seed-like]]
 (``--write`` also writes docs/simulator_energy.md; ``--trunk K`` adds a trunk-balance moment of
 stiffness K N m/rad; ``--lossless`` runs issue 17's passive test instead: no damping, no push-off,
 lossless surface, per hop stance time and COM apex, hop N against hop 3.)
@@ -65,26 +65,31 @@ def trial_budget(freq_hz: float, hops: int, flight: str = "prescribed", trunk: f
     return [r for r in rows if "flight_j" in r], trial.stop_reason
 
 
-def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str) -> str:
+def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str, seed_like: bool = False) -> str:
     """Issue 17's passive test: no damping, no push-off, lossless hard surface, no sliding; per hop the stance
-    time and the COM apex height of the following flight, and how hop ``hops`` compares with hop 3."""
+    time and the COM apex height of the following flight, and how hop ``hops`` compares with hop 3.
+    ``seed_like``: with scenarios.seed_like_options (toe-tip contact, its posture and trunk balance)."""
     from hop_impedance.simulation.dynamics import body_com, com_velocity
     from hop_impedance.simulation.ground import HARD, lossless
-    from hop_impedance.simulation.scenarios import Effects
+    from hop_impedance.simulation.scenarios import Effects, seed_like_options
 
+    options = {"trunk_balance": TrunkBalance(trunk) if trunk else None}
+    if seed_like:
+        options = {k: v for k, v in seed_like_options().items() if k != "push_timing"}
     chain, config = hopping_config(freq_hz, "hard", hops, Effects(damping=False, push_off=False), variability=False,
-                                   trunk_balance=TrunkBalance(trunk) if trunk else None, flight=flight)
+                                   flight=flight, **options)
     config = dataclasses.replace(config, surface=lossless(HARD), friction_coefficient=None)
     try:
         trial = simulate_hopping(chain, config, seed=1)
     except ValueError as exc:
-        return f"{flight}, {freq_hz} Hz, trunk {trunk:g}: no trial ({exc})"
+        return f"{flight}, {freq_hz} Hz, {'seed-like options' if seed_like else f'trunk {trunk:g}'}: no trial ({exc})"
     rows = []
     for rec in trial.stances:
         g, gd = rec.stance.g[-1], rec.stance.gd[-1]
         vz = com_velocity(chain, g, gd)[1]
         rows.append((rec.stance.duration_s, body_com(chain, g)[1] + max(vz, 0.0) ** 2 / (2 * chain.gravity_m_s2)))
-    lines = [f"{flight}, {freq_hz} Hz, trunk {trunk:g} N m/rad: {len(rows)} hops"
+    setup = "seed-like options" if seed_like else f"trunk {trunk:g} N m/rad"
+    lines = [f"{flight}, {freq_hz} Hz, {setup}: {len(rows)} hops"
              + (f" (stopped: {trial.stop_reason})" if trial.stop_reason else "")]
     lines += [f"  hop {i + 1}: stance {1000 * ts:.1f} ms, COM apex {apex:.4f} m" for i, (ts, apex) in enumerate(rows)]
     if len(rows) >= 4:
@@ -102,11 +107,13 @@ def main() -> None:
     parser.add_argument("--write", action="store_true", help="also write docs/simulator_energy.md")
     parser.add_argument("--lossless", action="store_true",
                         help="instead: the passive lossless trial (no damping, push-off or ground loss) hop by hop")
+    parser.add_argument("--seed-like", action="store_true",
+                        help="with --lossless: scenarios.seed_like_options (toe-tip contact, posture, trunk balance)")
     args = parser.parse_args()
     if args.lossless:
         for flight in args.flights.split(","):
             for freq in (float(f) for f in args.freqs.split(",")):
-                print(lossless_hops(freq, args.hops, args.trunk, flight), flush=True)
+                print(lossless_hops(freq, args.hops, args.trunk, flight, args.seed_like), flush=True)
         return
     lines = ["| flight | frequency (Hz) | push-off work | damping | springs left at take-off | ground | trunk | flight | "
              "stance balance residual |", "|---|---|---|---|---|---|---|---|---|"]

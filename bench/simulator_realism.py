@@ -131,6 +131,11 @@ def measure(freq_hz: float, hops: int = 6, seed: int = 1, trunk: bool = False, f
     mean["power_neg_w_kg"] = -mean["brake_j"] * per_leg_kg_cycle
     mean["moment_nm_kg"] = mean["moment_integral_nm_s"] * per_leg_kg_cycle
     mean["rom_cycle_deg"] = np.degrees(np.ptp(rho_cycle, axis=0))
+    # Hip marker's vertical range over each whole hop cycle (touchdown to next touchdown), from the markers.
+    hip_z = sagittal_markers(rec.markers)[:, MARKER_NAMES.index("hip"), 1]
+    tds = [s["touchdown_s"] for s in stances]
+    ranges = [np.ptp(hip_z[(t_m >= a) & (t_m < b)]) for a, b in zip(tds[:-1], tds[1:])]
+    mean["hip_range_cycle_m"] = float(np.mean(ranges)) if ranges else np.nan
     mean["notes"] = list(truth["notes"]) + ([f"stopped: {truth['stop_reason']}"] if truth["stop_reason"] else [])
     mean["n_stances"] = len(rows)
     return mean
@@ -158,6 +163,9 @@ def table(results: dict, hopexo: dict) -> str:
         BANDS["grf"])
     row("hip vertical excursion (m)", [results[f]["hip_exc_m"] for f in fs], [SEED_TABLE1[f]["hip_exc_m"] for f in fs],
         "{:.3f}", BANDS["hip_exc"])
+    row("hip vertical range over the hop cycle (m; another reading of the seed's excursion, see Newton table)",
+        [results[f]["hip_range_cycle_m"] for f in fs], [SEED_TABLE1[f]["hip_exc_m"] for f in fs], "{:.3f}",
+        BANDS["hip_exc"])
     for j, name in enumerate(("ankle", "knee", "hip")):
         row(f"{name} range of flexion (rad)", [results[f]["rom"][j] for f in fs], [SEED_TABLE1[f]["rom"][j] for f in fs],
             "{:.2f}", BANDS["rom"])
@@ -221,7 +229,7 @@ def seed_newton_check(mass_kg: float = 54.8, g: float = 9.81) -> str:
 
 def failed(freq_hz: float, reason: str) -> dict:
     """Placeholder figures (NaN, shown as 'nan') for a frequency whose trial could not be measured."""
-    scalar = ("stance_ms", "grf_bw", "grf_n", "hip_exc_m", "k_leg", "freq_hz")
+    scalar = ("stance_ms", "grf_bw", "grf_n", "hip_exc_m", "hip_range_cycle_m", "k_leg", "freq_hz")
     joint = ("rom", "mmax", "brake_j", "push_j", "power_pos_w_kg", "power_neg_w_kg", "moment_nm_kg", "rom_cycle_deg")
     return {**{k: np.nan for k in scalar}, **{k: np.full(3, np.nan) for k in joint},
             "notes": [f"{freq_hz} Hz not measured: {reason}"], "n_stances": 0}
