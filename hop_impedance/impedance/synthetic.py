@@ -16,9 +16,14 @@ noise of about sqrt(2) * 1 mm / segment length (ankle 0.01 rad with the short
 foot segment, knee and hip 0.005 rad) and, through the lever arm of a
 ~3 BW ground reaction force, about 2 N m of raw moment noise (the 2 N force
 noise adds under 2 N m at the hip's ~1 m lever arm). Both are white at the
-sample rate and then low-pass filtered like inverse-dynamics inputs (4th-order
-Butterworth, 12 Hz, zero lag, over a window padded by one stance on each side
-so that the stance edges are filtered like the inside of a recording). The
+sample rate and then low-pass filtered at 12 Hz with zero lag, over a window
+padded by one stance on each side so that the stance edges are filtered like
+the inside of a recording. The filter is a 4th-order Butterworth run forwards
+and backwards (8th order in effect), steeper than the pipeline's own
+``biomech.filtering.lowpass`` (2nd order each way): kept because every rate
+and tolerance measured on these stances (tests, docs/impedance_model.md)
+rests on it; with ``lowpass`` instead, a KKT test's stance
+(test_qp_fit.py, 4 terms) no longer has an active constraint. The
 angular velocity carries the derivative of the filtered angle noise.
 """
 
