@@ -121,46 +121,55 @@ def write_figures(records: list[StanceFitRecord], conditions: list[str], out_dir
 
     out_dir.mkdir(parents=True, exist_ok=True)
     colors = {c: plt.cm.viridis(i / max(len(conditions) - 1, 1)) for i, c in enumerate(conditions)}
+    figures = (
+        ("moment_angle.png", _plot_moment_angle, 6),
+        ("stiffness_time.png", _plot_stiffness_time, 7),
+        ("max_vs_initial_stiffness.png", _plot_max_vs_initial, 7),
+    )
     paths = []
-
-    fig, axes = plt.subplots(1, 3, figsize=(12, 4))
-    for ax, joint in zip(axes, JOINTS):
-        for c in conditions:
-            sel = [r.fit for r in records if r.joint == joint and r.condition == c]
-            if not sel:
-                continue
-            f = sel[len(sel) // 2]  # a middle stance of the condition
-            d = f.angle_rad - f.rho0
-            ax.plot(d, f.moment_nm, color=colors[c], lw=1.5, label=f"{c} measured")
-            ax.plot(d, f.moment_fit, color=colors[c], ls="--", lw=1, label=f"{c} variable K")
-            ax.plot(d, f.moment_constant, color=colors[c], ls=":", lw=1, label=f"{c} constant K")
-        ax.set(title=joint, xlabel="rho - rho0 (rad, flexion +)", ylabel="moment (N m, extensor +)")
-    axes[0].legend(fontsize=6)
-    paths.append(_save(fig, out_dir / "moment_angle.png", plt))
-
-    fig, axes = plt.subplots(1, 3, figsize=(12, 4))
-    for ax, joint in zip(axes, JOINTS):
-        for c in conditions:
-            for i, r in enumerate(r for r in records if r.joint == joint and r.condition == c):
-                ax.plot(r.fit.time_s, r.fit.stiffness, color=colors[c], lw=0.8, label=c if i == 0 else None)
-        ax.set(title=joint, xlabel="time since touchdown (s)", ylabel="K (N m/rad)")
-    axes[0].legend(fontsize=7)
-    paths.append(_save(fig, out_dir / "stiffness_time.png", plt))
-
-    fig, axes = plt.subplots(1, 3, figsize=(12, 4))
-    for ax, joint in zip(axes, JOINTS):
-        top = 0.0
-        for c in conditions:
-            sel = [r.fit for r in records if r.joint == joint and r.condition == c]
-            x = [f.initial_stiffness for f in sel]
-            y = [f.max_stiffness for f in sel]
-            ax.scatter(x, y, s=12, color=colors[c], label=c)
-            top = max([top] + [v for v in x + y if np.isfinite(v)])
-        ax.plot([0, top], [0, top], color="0.6", lw=0.8)
-        ax.set(title=joint, xlabel="initial stiffness k0 (N m/rad)", ylabel="maximal stiffness (N m/rad)")
-    axes[0].legend(fontsize=7)
-    paths.append(_save(fig, out_dir / "max_vs_initial_stiffness.png", plt))
+    for name, plot, legend_size in figures:
+        fig, axes = plt.subplots(1, 3, figsize=(12, 4))
+        for ax, joint in zip(axes, JOINTS):
+            plot(ax, [r for r in records if r.joint == joint], conditions, colors)
+            ax.set_title(joint)
+        axes[0].legend(fontsize=legend_size)
+        paths.append(_save(fig, out_dir / name, plt))
     return paths
+
+
+def _plot_moment_angle(ax, records: list[StanceFitRecord], conditions: list[str], colors: dict) -> None:
+    """Measured, variable-K and constant-K moment against rho - rho0 of a middle stance per condition (one joint)."""
+    for c in conditions:
+        sel = [r.fit for r in records if r.condition == c]
+        if not sel:
+            continue
+        f = sel[len(sel) // 2]  # a middle stance of the condition
+        d = f.angle_rad - f.rho0
+        ax.plot(d, f.moment_nm, color=colors[c], lw=1.5, label=f"{c} measured")
+        ax.plot(d, f.moment_fit, color=colors[c], ls="--", lw=1, label=f"{c} variable K")
+        ax.plot(d, f.moment_constant, color=colors[c], ls=":", lw=1, label=f"{c} constant K")
+    ax.set(xlabel="rho - rho0 (rad, flexion +)", ylabel="moment (N m, extensor +)")
+
+
+def _plot_stiffness_time(ax, records: list[StanceFitRecord], conditions: list[str], colors: dict) -> None:
+    """K(t) of every stance, coloured by condition (one joint)."""
+    for c in conditions:
+        for i, r in enumerate(r for r in records if r.condition == c):
+            ax.plot(r.fit.time_s, r.fit.stiffness, color=colors[c], lw=0.8, label=c if i == 0 else None)
+    ax.set(xlabel="time since touchdown (s)", ylabel="K (N m/rad)")
+
+
+def _plot_max_vs_initial(ax, records: list[StanceFitRecord], conditions: list[str], colors: dict) -> None:
+    """Maximal against initial stiffness per stance with the identity line (one joint)."""
+    top = 0.0
+    for c in conditions:
+        sel = [r.fit for r in records if r.condition == c]
+        x = [f.initial_stiffness for f in sel]
+        y = [f.max_stiffness for f in sel]
+        ax.scatter(x, y, s=12, color=colors[c], label=c)
+        top = max([top] + [v for v in x + y if np.isfinite(v)])
+    ax.plot([0, top], [0, top], color="0.6", lw=0.8)
+    ax.set(xlabel="initial stiffness k0 (N m/rad)", ylabel="maximal stiffness (N m/rad)")
 
 
 def _save(fig, path: Path, plt) -> Path:

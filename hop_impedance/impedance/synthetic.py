@@ -81,6 +81,34 @@ def _filtered_noise(rng: np.random.Generator, n: int, sigma: float, rate_hz: flo
     return signal.sosfiltfilt(sos, raw)[n : 2 * n]
 
 
+def seed_trajectory(joint: str, frequency_hz: float, rate_hz: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Time (s), angle rho (rad) and omega (rad/s), shapes (N,), of a stance with Table 1's time and range of flexion.
+
+    ``rho = rho0 + A sin(pi s) - e s`` with the warped time
+    ``s = t/T - c sin(2 pi t/T) / (2 pi)`` (module docstring), sampled at ``rate_hz`` from touchdown.
+    """
+    T = TABLE1_STANCE_TIME_S[frequency_hz]
+    A = TABLE1_RANGE_OF_FLEXION_RAD[frequency_hz][joint]
+    e, c = 0.1 * A, 0.2
+    n = int(round(T * rate_hz)) + 1
+    t = np.arange(n) / rate_hz
+    s = t / T - c * np.sin(2 * np.pi * t / T) / (2 * np.pi)
+    s_dot = (1.0 - c * np.cos(2 * np.pi * t / T)) / T
+    rho = TOUCHDOWN_ANGLE_RAD[joint] + A * np.sin(np.pi * s) - e * s
+    omega = (A * np.pi * np.cos(np.pi * s) - e) * s_dot
+    return t, rho, omega
+
+
+def seed_law_moment(d: np.ndarray, omega: np.ndarray, coefficients: tuple[float, float, float, float]) -> np.ndarray:
+    """Moment (N m) of the seed's reduced law (Eqs. 10-11) in closed form, independent of the regressor code.
+
+    ``M = m0 + k0 d + k1 d**2 / 2 + b0 omega`` for ``coefficients = (m0, k0, k1, b0)``
+    and ``d = rho - rho0`` (rad), ``omega`` (rad/s).
+    """
+    m0, k0, k1, b0 = coefficients
+    return m0 + k0 * d + k1 * d**2 / 2 + b0 * omega
+
+
 def synthetic_stance(
     joint: str,
     frequency_hz: float,
@@ -119,26 +147,16 @@ def synthetic_stance(
     SyntheticStance
     """
     k0, k1 = (coefficient_scale * c for c in TABLE2_COEFFICIENTS[frequency_hz][joint])
-    T = TABLE1_STANCE_TIME_S[frequency_hz]
-    A = TABLE1_RANGE_OF_FLEXION_RAD[frequency_hz][joint]
-    e, c = 0.1 * A, 0.2
-    n = int(round(T * rate_hz)) + 1
-    t = np.arange(n) / rate_hz
-    s = t / T - c * np.sin(2 * np.pi * t / T) / (2 * np.pi)
-    s_dot = (1.0 - c * np.cos(2 * np.pi * t / T)) / T
-    rho0 = TOUCHDOWN_ANGLE_RAD[joint]
-    rho = rho0 + A * np.sin(np.pi * s) - e * s
-    omega = (A * np.pi * np.cos(np.pi * s) - e) * s_dot
-    d = rho - rho0
-    moment = m0 + k0 * d + k1 * d**2 / 2 + b0 * omega
+    t, rho, omega = seed_trajectory(joint, frequency_hz, rate_hz)
+    moment = seed_law_moment(rho - rho[0], omega, (m0, k0, k1, b0))
     angle_meas, omega_meas, moment_meas = rho.copy(), omega.copy(), moment.copy()
     if realistic_noise:
         if rng is None:
             raise ValueError("synthetic_stance: realistic_noise needs an rng")
-        angle_noise = _filtered_noise(rng, n, ANGLE_NOISE_RAD[joint], rate_hz, cutoff_hz)
+        angle_noise = _filtered_noise(rng, t.size, ANGLE_NOISE_RAD[joint], rate_hz, cutoff_hz)
         angle_meas = rho + angle_noise
         omega_meas = omega + np.gradient(angle_noise, t)
-        moment_meas = moment + _filtered_noise(rng, n, MOMENT_NOISE_NM, rate_hz, cutoff_hz)
+        moment_meas = moment + _filtered_noise(rng, t.size, MOMENT_NOISE_NM, rate_hz, cutoff_hz)
     return SyntheticStance(
         time_s=t,
         angle_rad=angle_meas,
