@@ -214,7 +214,8 @@ def seed_newton_check(mass_kg: float = 54.8, g: float = 9.81) -> str:
     """
     lines = ["| f (Hz) | seed stance (ms) | seed peak GRF (BW) | half-sine peak for that stance (BW) | "
              "COM drop, half-sine / constant force (m) | seed hip excursion (m) | seed peak GRF / (excursion/2) "
-             "(kN/m) vs seed Table 2 leg stiffness |", "|---|---|---|---|---|---|---|"]
+             "(kN/m) vs seed Table 2 leg stiffness | seed max ankle / knee / hip moment over peak GRF (m) |",
+             "|---|---|---|---|---|---|---|---|"]
     for f, row in SEED_TABLE1.items():
         tc, period = row["stance_ms"] / 1000.0, 1.0 / f
         v = g * (period - tc) / 2.0
@@ -223,7 +224,8 @@ def seed_newton_check(mass_kg: float = 54.8, g: float = 9.81) -> str:
         drop = v * th + g * th**2 / 2.0 - fp * (tc / np.pi) * (th - tc / np.pi)
         k_half = row["grf_bw"] * mass_kg * g / (row["hip_exc_m"] / 2.0) / 1000.0
         lines.append(f"| {f:.2f} | {row['stance_ms']} | {row['grf_bw']:.1f} | {fp / g:.2f} | {drop:.3f} / "
-                     f"{v * tc / 4.0:.3f} | {row['hip_exc_m']:.2f} | {k_half:.1f} vs {SEED_LEG_STIFFNESS_KN_M[f]} |")
+                     f"{v * tc / 4.0:.3f} | {row['hip_exc_m']:.2f} | {k_half:.1f} vs {SEED_LEG_STIFFNESS_KN_M[f]} | "
+                     + " / ".join(f"{m / (row['grf_bw'] * mass_kg * g):.3f}" for m in row["mmax"]) + " |")
     return "\n".join(lines)
 
 
