@@ -2,57 +2,82 @@
 
 The low-latency plan: declare a take-off provisionally after a few samples below the level
 (<= 5 ms at 1 kHz), analyse and fit the stance at once on a window ending ``PAD`` s after the
-take-off, and analyse offline on the same windows so live and offline agree. This runs
-``bench/recovery_errors.py`` (same arguments, same simulated trials and table) with every
-stance analysed by the live stage in low-latency mode
-(:class:`hop_impedance.biomech.stages.StanceAnalysisStage` with ``post_pad_s=PAD``: the window ends
-``PAD`` after take-off, the following flight's plate offset comes from what the window holds) instead
-of the batch windows of :func:`hop_impedance.biomech.analysis.analyze_recording`. Compare its table
-with ``recovery_errors.py``'s: the plan requires every cell within 2 percentage points.
+take-off, and analyse offline on the same windows so live and offline agree. This runs the trials
+of ``bench/recovery_errors.py`` (same arguments) once with the batch analysis and once per PAD with
+``AnalysisOptions.post_takeoff_s = PAD`` (:func:`hop_impedance.biomech.analysis.analyze_short_window`:
+the window and end-of-stance treatment the live stage runs too, test/biomech/test_short_windows.py),
+prints each table and then the cells (frequency x clean/noisy x joint x k0/k1 median error, 36 by
+default) that moved by more than 2 percentage points: issue 15 requires none.
 
     nice -n 10 .venv/bin/python bench/low_latency_windows.py 0.005
-    nice -n 10 .venv/bin/python bench/low_latency_windows.py 0.05 --frequencies 2.2
+    nice -n 10 .venv/bin/python bench/low_latency_windows.py 0.005 0.01 0.05 --frequencies 2.2
 
-The stage is fed the whole recording in one chunk: its windows depend on the event times only
-(on sim_2p20hz_hard one chunk and 20 ms chunks gave identical joint moments at PAD = 5 ms), and
-the stances must be the batch ones (checked).
+CPU: about 25 s per frequency per analysis (batch + each PAD), as recovery_errors.py.
 """
 
 from __future__ import annotations
 
-import runpy
-import sys
+import argparse
+import tempfile
+import time
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
+from recovery_errors import print_table
+
 import hop_impedance.biomech.analysis as analysis
-from hop_impedance.biomech.stages import StanceAnalysisStage
+from hop_impedance.validation.coefficient_recovery import JOINTS, recover_pooled
 
-batch_analyze = analysis.analyze_recording
+#: A cell "moves" when its median error changes by more than this (percentage points; issue 15).
+BOUND_PP = 2.0
 
 
-def analyze_on_low_latency_windows(rec, options=None, *, post_pad_s: float):
-    """``analyze_recording`` with each stance's result from the low-latency stage (``post_pad_s`` after take-off)."""
-    options = options or analysis.AnalysisOptions()
-    result = batch_analyze(rec, options)  # model, subject, warnings and the batch stances to check against
-    data = analysis.recording_span(rec)
-    stage = StanceAnalysisStage(result.model, rec.subject.body_mass_kg, options, post_pad_s=post_pad_s)
-    markers = (data.marker_t_s, data.markers_xz) if data.marker_t_s is not None else None
-    stances = stage.push((data.force_t_s, data.wrench), markers) + stage.flush()
-    if [s.touchdown_s for s in stances] != [s.touchdown_s for s in result.stances]:
-        raise RuntimeError("the low-latency stage found other stances than the batch analysis")
-    result.stances[:] = stances
-    return result
+def medians(results) -> dict:
+    """(label, joint) -> median [k0, k1] error (%) of one frequency's pooled results."""
+    return {(label, j): np.median(100 * r.error_array(j), axis=0) for label, r in results.items() for j in JOINTS}
 
 
 def main() -> None:
-    if len(sys.argv) < 2:
-        sys.exit(__doc__)
-    pad = float(sys.argv.pop(1))
-    print(f"every stance analysed on the low-latency window: post_pad_s = {pad * 1e3:g} ms after take-off", flush=True)
-    # recovery_errors imports analyze_recording from this module at call time: it gets the low-latency one
-    analysis.analyze_recording = lambda rec, options=None: analyze_on_low_latency_windows(rec, options, post_pad_s=pad)
-    sys.argv = [str(Path(__file__).with_name("recovery_errors.py"))] + sys.argv[1:]
-    runpy.run_path(sys.argv[0], run_name="__main__")
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("pads", type=float, nargs="+", metavar="PAD", help="window end after take-off (s)")
+    parser.add_argument("--frequencies", type=float, nargs="+", default=[1.53, 1.87, 2.20])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[11, 12, 13, 14])
+    parser.add_argument("--hops", type=int, default=4)
+    parser.add_argument("--clean-cutoff", type=float, default=40.0)
+    parser.add_argument("--noisy-cutoff", type=float, default=12.0)
+    args = parser.parse_args()
+    cpu0 = time.process_time()
+    cutoffs = {"clean": args.clean_cutoff, "noisy": args.noisy_cutoff}
+    batch_analyze = analysis.analyze_recording
+    cells: dict[float | None, dict] = {}
+    with tempfile.TemporaryDirectory() as folder:
+        for pad in [None] + args.pads:
+            # recover_trial imports analyze_recording from the module at call time: it gets this one
+            analysis.analyze_recording = (batch_analyze if pad is None else
+                                          lambda rec, options=None, pad=pad: batch_analyze(
+                                              rec, replace(options or analysis.AnalysisOptions(), post_takeoff_s=pad)))
+            print("batch analysis (whole record)" if pad is None else
+                  f"short windows: post_takeoff_s = {pad * 1e3:g} ms after take-off", flush=True)
+            cells[pad] = {}
+            for freq in args.frequencies:
+                results = recover_pooled(freq, args.seeds, Path(folder), cutoff_hz=cutoffs, n_hops=args.hops)
+                print_table(freq, results)
+                cells[pad].update({(freq,) + key: value for key, value in medians(results).items()})
+    analysis.analyze_recording = batch_analyze
+    batch = cells.pop(None)
+    print(f"\ncells moved by more than {BOUND_PP:g} pp against batch (median errors, %):")
+    for pad, table in cells.items():
+        moved, largest = [], {"clean": 0.0, "noisy": 0.0}
+        for key, value in table.items():
+            for name, b, s in zip(("k0", "k1"), batch[key], value):
+                largest[key[1]] = max(largest[key[1]], abs(s - b))
+                if abs(s - b) > BOUND_PP:
+                    moved.append(f"  {key[0]:4.2f} Hz {key[1]:5s} {key[2]:5s} {name}: {b:+6.1f} -> {s:+6.1f} ({s - b:+.1f} pp)")
+        print(f"PAD {pad * 1e3:g} ms: {len(moved)} of {2 * len(table)} cells moved; "
+              f"largest move clean {largest['clean']:.1f} pp, noisy {largest['noisy']:.1f} pp")
+        print("\n".join(moved))
+    print(f"CPU {time.process_time() - cpu0:.1f} s")
 
 
 if __name__ == "__main__":
