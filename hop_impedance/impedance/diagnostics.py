@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -67,7 +68,7 @@ class CollinearityDiagnostics:
     variance_inflation_factors: np.ndarray
     correlation_inverse: np.ndarray | None = field(default=None, repr=False, compare=False)
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         """Plain-JSON form (:func:`hop_impedance.io.impedance_json.diagnostics_to_json`)."""
         from hop_impedance.io.impedance_json import diagnostics_to_json
 

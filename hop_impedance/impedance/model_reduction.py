@@ -479,14 +479,16 @@ class _Elimination:
         self.active.remove(position)
 
 
-def _candidates(state: _Elimination, higher: list[frozenset], alpha: float, familywise: bool) -> list[int]:
+def _candidates(state: _Elimination, higher: list[frozenset[int]], alpha: float, familywise: bool) -> list[int]:
     """Term positions that may be removed now: eligible under the hierarchy and not significant."""
     eligible = [i for i in state.active if higher[i].isdisjoint(state.active)]
     level = alpha / len(eligible) if familywise else alpha
     return [i for i in eligible if state.p_values[i] > level]
 
 
-def _next_removal(candidates: list[int], f_eff: dict[int, float], vif: dict[int, float], vif_limit: float):
+def _next_removal(
+    candidates: list[int], f_eff: dict[int, float], vif: dict[int, float], vif_limit: float
+) -> tuple[int, str]:
     """(position, reason) of the term to remove: the collinear candidate with the smallest partial F, else any candidate's.
 
     Smallest partial F = smallest loss of fit (equal to the largest p when
@@ -592,7 +594,9 @@ def reduce_model(
     return _reduction_result(state, position, steps, settings.alpha)
 
 
-def _reduction_result(state: _Elimination, position: dict[str, int], steps: list, alpha: float) -> ReductionResult:
+def _reduction_result(
+    state: _Elimination, position: dict[str, int], steps: list[EliminationStep], alpha: float
+) -> ReductionResult:
     kept = tuple(t for t in TERM_NAMES if t in position and position[t] in state.active)
     factors = None
     if state.sse_function is None and state.ols is not None:

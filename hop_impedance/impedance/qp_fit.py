@@ -42,7 +42,9 @@ every row, so the problem is never primal infeasible.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 import osqp
@@ -308,7 +310,9 @@ class ConstrainedLeastSquares:
         #: The last :class:`QpSolution` returned (diagnostics and benchmarks).
         self.last_solution: QpSolution | None = None
 
-    def _result(self, problem: ScaledProblem, xs: np.ndarray, status: str, info: dict, slack=None) -> QpSolution:
+    def _result(
+        self, problem: ScaledProblem, xs: np.ndarray, status: str, info: dict[str, Any], slack: np.ndarray | None = None
+    ) -> QpSolution:
         """The :class:`QpSolution` of the scaled solution ``xs`` (``slack = A @ xs`` when already known).
 
         ``info``: ``iterations``, ``polished``, ``working_rows``, ``rounds`` (as in :class:`QpSolution`).
@@ -359,7 +363,8 @@ class ConstrainedLeastSquares:
         work = np.zeros(0, dtype=int)
         duals = np.zeros(0)
         iterations, rounds, polished = 0, 0, False
-        solver = P_upper = None  # OSQP workspace and P data, fetched at the first round only
+        solver: osqp.OSQP | None = None  # OSQP workspace and P data, fetched at the first round only
+        P_upper = np.zeros(0)
         while True:
             slack = A @ x
             tol = self.eps + self.eps * (float(np.abs(slack).max()) if slack.size else 0.0)
@@ -410,7 +415,9 @@ class ConstrainedLeastSquares:
             self._small[p].update_settings(polishing=polishing, eps_abs=eps, eps_rel=eps)
             self._small_settings[p] = (polishing, eps)
 
-    def _solve_rows(self, solver, P_upper, q, rows, x0, y0):
+    def _solve_rows(
+        self, solver: osqp.OSQP, P_upper: np.ndarray, q: np.ndarray, rows: np.ndarray, x0: np.ndarray, y0: np.ndarray
+    ) -> tuple[str, np.ndarray, np.ndarray, int, bool]:
         """One OSQP solve of the scaled QP with ``rows @ x >= 0`` (padded with free rows).
 
         The stages of :meth:`_solve_in_stages`; a polished iterate is accepted
@@ -467,19 +474,20 @@ class ConstrainedLeastSquares:
         ols_feasible = bool((A @ x_ols >= -1e-9).all())
         P_csc, A_csc = _upper_csc(P), _dense_csc(A)
         shape = (p, A.shape[0])
-        if self._solver is not None and self._shape == shape:
-            self._solver.update(Px=P_csc.data, q=q, Ax=A_csc.data, l=lower, u=upper)
+        solver = self._solver
+        if solver is not None and self._shape == shape:
+            solver.update(Px=P_csc.data, q=q, Ax=A_csc.data, l=lower, u=upper)
         else:
-            self._solver = osqp.OSQP(algebra=OSQP_ALGEBRA)
-            self._solver.setup(P_csc, q, A_csc, lower, upper, **{**self.settings, "polishing": False})
+            solver = self._solver = osqp.OSQP(algebra=OSQP_ALGEBRA)
+            solver.setup(P_csc, q, A_csc, lower, upper, **{**self.settings, "polishing": False})
             self._shape = shape
         if ols_feasible or p not in self._last_x:
-            self._solver.warm_start(x=x_ols)
+            solver.warm_start(x=x_ols)
         else:
-            self._solver.warm_start(x=self._last_x[p])
+            solver.warm_start(x=self._last_x[p])
         result, iterations, _, _ = self._solve_in_stages(
-            self._solver,
-            lambda polishing, eps: self._solver.update_settings(eps_abs=eps, eps_rel=eps, polishing=polishing),
+            solver,
+            lambda polishing, eps: solver.update_settings(eps_abs=eps, eps_rel=eps, polishing=polishing),
             A, A.shape[0], exact=lambda polished_result: True, accept_unpolished=ols_feasible,
         )
         status = str(result.info.status)
@@ -496,7 +504,15 @@ class ConstrainedLeastSquares:
         """
         return not (duals > self.eps * max(1.0, float(np.abs(duals).max(initial=0.0)))).any()
 
-    def _solve_in_stages(self, solver, configure, rows, k, exact, accept_unpolished=False):
+    def _solve_in_stages(
+        self,
+        solver: osqp.OSQP,
+        configure: Callable[[bool, float], None],
+        rows: np.ndarray,
+        k: int,
+        exact: Callable[[Any], bool],
+        accept_unpolished: bool = False,
+    ) -> tuple[Any, int, bool, bool]:
         """ADMM through :attr:`stages`; polish a stage's iterate only once it shows an active row.
 
         Shared by the working-set and the full-row paths. Each stage runs ADMM

@@ -44,7 +44,9 @@ session, or uses a structure given as a parameter.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 from hop_impedance.biomech.analysis import AnalysisOptions, RecordingAnalysis, StanceResult
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
@@ -161,14 +163,14 @@ class TrialStructure:
     stances: int = 0
     reason: str = ""
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         """Plain JSON types (:func:`hop_impedance.io.impedance_json.structure_to_json`)."""
         from hop_impedance.io.impedance_json import structure_to_json
 
         return structure_to_json(self)
 
 
-def given_structure(terms: tuple[str, ...] | list[str], why: str = "given") -> TrialStructure:
+def given_structure(terms: Sequence[str], why: str = "given") -> TrialStructure:
     """A structure fixed in advance (a parameter, a command-line option); checks the names."""
     terms = tuple(terms)
     unknown = [t for t in terms if t not in TERM_NAMES]
@@ -275,7 +277,9 @@ def fit_structured(
     return out
 
 
-def _fit_one_joint(stance, joint, options, solvers) -> JointImpedanceFit:
+def _fit_one_joint(
+    stance: StanceResult, joint: str, options: FitOptions, solvers: dict[str, ConstrainedLeastSquares] | None
+) -> JointImpedanceFit:
     return fit_stance_joints(stance, options, solvers, joints=(joint,))[joint]
 
 
@@ -329,7 +333,7 @@ class StructureSelector:
         provisional.
     """
 
-    def __init__(self, options: FitOptions, terms=None, warmup_stances: int = 5,
+    def __init__(self, options: FitOptions, terms: dict[str, Sequence[str]] | None = None, warmup_stances: int = 5,
                  given_reason: str = "given as a parameter") -> None:
         if terms is None and warmup_stances < 1:
             raise ValueError(f"warmup_stances must be >= 1 without given terms, got {warmup_stances}")

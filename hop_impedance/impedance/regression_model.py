@@ -347,7 +347,7 @@ def stance_problem(
     """Regressors of one stance (:func:`stance_regressors`) and the rows and moment of its fit ``window`` (bool, (N,))."""
     regressors = stance_regressors(time_s, angle_rad, angular_velocity_rad_s)
     whole = bool(window.all())  # the default: nothing excluded, no windowed copies needed
-    def pick(values):
+    def pick(values: np.ndarray) -> np.ndarray:
         return values if whole else values[window]
     return StanceProblem(regressors, window, pick(regressors.moment_rows), pick(np.asarray(moment_nm, float)),
                          pick(regressors.time_s))

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from scipy import special
@@ -179,7 +180,7 @@ class JointImpedanceFit:
         return float(self.stiffness.max()) if self.stiffness.size else float("nan")
 
 
-def _rejected(reason: str, status: str = "rejected", **extra) -> JointImpedanceFit:
+def _rejected(reason: str, status: str = "rejected", **extra: Any) -> JointImpedanceFit:
     return JointImpedanceFit(status=status, rejection_reason=reason, **extra)
 
 
@@ -349,7 +350,7 @@ def coefficient_inference(problem: StanceProblem, model: SelectedModel, solution
     return CoefficientInference(se, p_values)
 
 
-def _model_context(problem: StanceProblem, model: SelectedModel, tau: np.ndarray, rho: np.ndarray) -> dict:
+def _model_context(problem: StanceProblem, model: SelectedModel, tau: np.ndarray, rho: np.ndarray) -> dict[str, Any]:
     """The :class:`JointImpedanceFit` fields known once the model is selected (also on a rejection)."""
     regs = problem.regressors
     return dict(time_s=regs.time_s, angle_rad=rho, moment_nm=tau, rho0=regs.rho0_rad, omega0=regs.omega0_rad_s,
@@ -357,7 +358,9 @@ def _model_context(problem: StanceProblem, model: SelectedModel, tau: np.ndarray
                 effective_samples=model.effective_samples)
 
 
-def fit_result(problem: StanceProblem, model: SelectedModel, solution: QpSolution, tau: np.ndarray, rho: np.ndarray):
+def fit_result(
+    problem: StanceProblem, model: SelectedModel, solution: QpSolution, tau: np.ndarray, rho: np.ndarray
+) -> JointImpedanceFit:
     """The :class:`JointImpedanceFit` of a solved model: K(t), B(t), moment fit, errors, constant-stiffness comparison.
 
     ``tau`` and ``rho`` are the whole stance's moment (N m) and angle (rad); errors are over the fit window.
@@ -430,7 +433,7 @@ def constant_stiffness_comparison(problem: StanceProblem, rho: np.ndarray, tau: 
     return ConstantStiffnessFit(k_overall, moment, float((problem.in_window(tau - moment) ** 2).sum()))
 
 
-def _checked_arrays(*arrays) -> list[np.ndarray]:
+def _checked_arrays(*arrays: np.ndarray) -> list[np.ndarray]:
     """The four input series as float arrays; ValueError unless all are 1-D of one length (a caller bug)."""
     out = [np.asarray(a, float) for a in arrays]
     if any(a.ndim != 1 or a.shape != out[0].shape for a in out):

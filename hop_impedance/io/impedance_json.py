@@ -9,7 +9,7 @@ diagnostics and a trial's model structure. Non-finite numbers become None
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -54,7 +54,7 @@ def _samples(values: np.ndarray) -> list[float | None]:
     return [json_float(v) for v in np.asarray(values, float)]
 
 
-def fit_to_json(fit: JointImpedanceFit) -> dict:
+def fit_to_json(fit: JointImpedanceFit) -> dict[str, Any]:
     """The ``fit`` object of one joint of one stance, with exactly :data:`FIT_JSON_KEYS`.
 
     Parameters
@@ -91,7 +91,7 @@ def fit_to_json(fit: JointImpedanceFit) -> dict:
     }
 
 
-def _clean(value):
+def _clean(value: Any) -> Any:
     """Floats and nested lists of an array-like, None for NaN and inf."""
     out = np.asarray(value, float).tolist()
     if isinstance(out, list):
@@ -99,7 +99,7 @@ def _clean(value):
     return json_float(out)
 
 
-def diagnostics_to_json(diagnostics: CollinearityDiagnostics) -> dict:
+def diagnostics_to_json(diagnostics: CollinearityDiagnostics) -> dict[str, Any]:
     """Plain-JSON form of :class:`CollinearityDiagnostics` (lists and floats; inf/NaN become None)."""
     d = diagnostics
     return {
@@ -113,7 +113,7 @@ def diagnostics_to_json(diagnostics: CollinearityDiagnostics) -> dict:
     }
 
 
-def structure_to_json(structure: TrialStructure) -> dict:
+def structure_to_json(structure: TrialStructure) -> dict[str, Any]:
     """Plain-JSON form of a trial's :class:`TrialStructure` (terms, kept-in counts, stances, reason)."""
     return {"terms": list(structure.terms), "kept_in": dict(structure.kept_in), "stances": structure.stances,
             "reason": structure.reason}
