@@ -20,18 +20,13 @@ Counting
   rate (``scipy.stats.binomtest(extra, runs).proportion_ci()``) and the one-sided 95 % upper bound
   (``alternative="less"``) are printed under the table.
 
-``--unique-gains`` also prints, per run, the held-out gain that each of the three late-stance look-alikes
-(rate-dependent stiffness, joint damping, push-off) still adds to a model that already holds the other two
-(:func:`unique_gains`; mean over stances and one-sided Wilcoxon p). A hidden effect that the data tell apart
-from the other two keeps a positive, significant gain there; a gain <= 0 means the other two reproduce it.
-
 Three sources (issue 16): our simulator (``--cases``), the second generator
 (``--strict-cases``, :mod:`hop_impedance.validation.strict_generator`) and truth-labelled outside
 recordings (``--foreign DIR``). The table gives counts with two-sided 95 % Clopper-Pearson intervals and
 the number of named steps whose held-out forward gap did not shrink.
 
 Usage: .venv/bin/python bench/discovery_hit_rates.py [--seeds N] [--null-seeds N] [--hops N] [--cases a,b,...]
-       [--sizes rate_fraction=0.25,...] [--freqs 2.2] [--unique-gains]
+       [--sizes rate_fraction=0.25,...] [--freqs 2.2]
        [--strict-cases null,angle_dependent_stiffness,... --strict-seeds N --strict-null-seeds N] [--foreign DIR]
 Prints one line per run and the table (markdown) at the end.
 ``--scheduler local`` (the embedded cluster of ``hop-impedance batch``) or ``--scheduler tcp://HOST:8786``
@@ -49,14 +44,8 @@ from pathlib import Path
 
 from scipy.stats import binomtest
 
-import numpy as np
-
-from hop_impedance.io.recording_io import load_recording
-from hop_impedance.discovery.identify import EFFECT_SIGNALS, SIGNALS, identify
-from hop_impedance.discovery.measurement import measure_trial
-from hop_impedance.discovery.model import ModelSpec
-from hop_impedance.discovery.selection import _one_sided_p, held_out_mse, signal_scales
 from hop_impedance.discovery.workflow import discover
+from hop_impedance.io.recording_io import load_recording
 from hop_impedance.simulation.scenarios import Effects
 from hop_impedance.simulation.sensors import SensorConfig
 from hop_impedance.simulation.stance_set import EffectSizes, simulate_stance_set_recording
@@ -108,32 +97,6 @@ def generate(name: str, seed: int, hops: int, sizes: EffectSizes = EffectSizes()
     return rec, freq
 
 
-#: The effects that are one late-stance bump in short stances (docs/discovery.md, ambiguity rules).
-LATE_STANCE_LOOKALIKES = ("rate_dependent_stiffness", "joint_damping", "active_push_off")
-
-
-def unique_gains(rec) -> dict[str, tuple[float, float]]:
-    """Per look-alike: (mean held-out gain, one-sided Wilcoxon p) of adding it to baseline + the other two.
-
-    Same leave-one-stance-out gain as the selection (``selection.score_candidates``, dimensionless sum of
-    MSE reductions over the effect's signals divided by their fixed scales); the other two effects'
-    nonlinear parameters (push-off timing) are fitted on all stances first.
-    """
-    trial = measure_trial(rec)
-    scale = np.array([signal_scales(trial)[sig] for sig in SIGNALS])
-    out = {}
-    for effect in LATE_STANCE_LOOKALIKES:
-        spec = ModelSpec()
-        for other in LATE_STANCE_LOOKALIKES:
-            if other != effect:
-                spec, _ = identify(spec, trial, trial.stances, other)
-        touched = np.array([sig in EFFECT_SIGNALS[effect] for sig in SIGNALS])
-        diff = (held_out_mse(spec, trial, None) - held_out_mse(spec, trial, effect)) / scale**2
-        gains = np.nan_to_num(np.where(touched, diff, 0.0)).sum(axis=1)
-        out[effect] = (float(gains.mean()), _one_sided_p(gains))
-    return out
-
-
 def classify(expected: set, doc: dict) -> dict:
     """Counting flags of one run (see module docstring)."""
     found = set(doc["effects_found"])
@@ -150,8 +113,6 @@ def main() -> None:
     ap.add_argument("--hops", type=int, default=8)
     ap.add_argument("--cases", default=",".join(CASES), help="simulator cases ('' for none)")
     ap.add_argument("--sizes", default="", help="EffectSizes overrides, e.g. rate_fraction=0.25,push_fraction=0.2")
-    ap.add_argument("--unique-gains", action="store_true",
-                    help="also print each late-stance look-alike's held-out gain over the other two")
     ap.add_argument("--strict-cases", default="", help="second-generator cases, e.g. " + ",".join(STRICT_CASES))
     ap.add_argument("--strict-seeds", type=int, default=5)
     ap.add_argument("--strict-null-seeds", type=int, default=10)
@@ -165,10 +126,10 @@ def main() -> None:
     args = ap.parse_args()
     sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})
     freqs = tuple(float(f) for f in args.freqs.split(",") if f) or None
-    calls = [("simulator", name, seed, args.hops, sizes, freqs, args.unique_gains)
+    calls = [("simulator", name, seed, args.hops, sizes, freqs)
              for name in filter(None, args.cases.split(","))
              for seed in range(args.null_seeds if name == "null" else args.seeds)]
-    calls += [("second generator", name, seed, args.hops, sizes, freqs, False)
+    calls += [("second generator", name, seed, args.hops, sizes, freqs)
               for name in filter(None, args.strict_cases.split(","))
               for seed in range(args.strict_null_seeds if name == "null" else args.strict_seeds)]
     tallies = {("simulator", n): new_tally() for n in filter(None, args.cases.split(","))}
@@ -188,7 +149,7 @@ def main() -> None:
     print_table(rows)
 
 
-def case_run(source: str, name: str, seed: int, hops: int, sizes: EffectSizes, freqs, unique: bool,
+def case_run(source: str, name: str, seed: int, hops: int, sizes: EffectSizes, freqs,
              workers: int | None = None) -> dict:
     """Generate one recording of a case (simulator or second generator), discover, return its tally."""
     tally = new_tally()
@@ -201,9 +162,6 @@ def case_run(source: str, name: str, seed: int, hops: int, sizes: EffectSizes, f
             print(f"{name} seed {seed}: generation failed: {exc}", flush=True)
             return tally
         run_one(rec, f"{name:28s} seed {seed} f={freq}", expected, tally, workers)
-        if unique:
-            print("    unique held-out gain over the other two look-alikes: " + "; ".join(
-                f"{e} {g:+.5f} (p {p:.3f})" for e, (g, p) in unique_gains(rec).items()), flush=True)
         return tally
     expected = set(STRICT_CASES[name].effects)
     try:

@@ -49,9 +49,9 @@ from scipy.integrate import trapezoid
 
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.discovery.forward import GAP_SIGNALS, ground_of
-from hop_impedance.discovery.identify import identify, touchdown_moments
+from hop_impedance.discovery.identify import identify, per_stance_push_off, touchdown_moments
 from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial, measure_trial, weight_n
-from hop_impedance.discovery.model import FittedLaw, ModelSpec
+from hop_impedance.discovery.model import EFFECT_NAMES, FittedLaw, ModelSpec
 from hop_impedance.recording import Recording
 from hop_impedance.simulation.stance import simulate_stance
 
@@ -70,8 +70,6 @@ WORK_SCALE = 1.0
 FLIGHT_SCALE_BW = 0.1
 #: Significance of the measured net joint work per stance (push-off admissibility).
 WORK_ALPHA = 0.05
-#: Fewest usable stances for held-out testing.
-MIN_STANCES = 5
 
 _CONTEXT: dict = {}
 
@@ -160,6 +158,7 @@ def _stance_by_index(trial: MeasuredTrial, index: int) -> MeasuredStance | None:
 def simulate_held_out(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: MeasuredStance,
                       scales: np.ndarray) -> dict:
     """Forward-simulate stance ``s`` with the identified model; gap figures of that stance."""
+    coefs = per_stance_push_off(spec, coefs, s)
     m0 = touchdown_moments(spec, coefs, s)
     law = FittedLaw(spec, np.asarray(coefs, float), m0)
     t_max = 1.5 * float(s.t_s[-1]) + 0.05
@@ -362,6 +361,10 @@ def ambiguous_with(best: ForwardScore, scores: list[ForwardScore]) -> list[dict]
                         "p_value_difference": p, "admissible": sc.admissible})
     return out
 
+
+def remaining(spec: ModelSpec) -> tuple[str, ...]:
+    """Candidate effects not yet in the model."""
+    return tuple(e for e in EFFECT_NAMES if not spec.has(e))
 
 
 def law_gaps(trial: MeasuredTrial, laws: list, grounds: list, offset_n: float = 0.0) -> np.ndarray:

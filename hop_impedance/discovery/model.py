@@ -3,16 +3,34 @@
 Joint law (per joint, pooled over stances, moments extensor positive)
 ---------------------------------------------------------------------
 With ``dr = rho - rho0`` and ``dw = omega - omega0`` (touchdown values),
-``S = int (omega - omega0) omega dt`` and ``t`` time since touchdown:
+``S = int (omega - omega0) omega dt``, ``S_speed = int (|omega| - |omega0|) omega dt`` and ``t`` time since
+touchdown:
 
     M = a(t) * E + D + P,
-    E = k0 dr [+ k1 dr^2/2 + k2 dr^3/3]  (angle_dependent_stiffness)  [+ k3 S] (rate_dependent_stiffness)
+    E = k0 dr [+ k1 dr^2/2 + k2 dr^3/3]  (angle_dependent_stiffness)
+          [+ k3 S] or [+ k3 S_speed] (rate_form)                         (rate_dependent_stiffness)
     D = b0 dw + b1 dw^2/2                                              (joint_damping)
     P = A sin^2(pi (t - onset) / duration) on [onset, onset + duration]  (active_push_off)
-    a(t) = 1 - (1 - a_min) exp(-t / tau)                                (time_dependent_activation)
+    a(t) = 1 - (1 - a_min) exp(-t / tau)          (time_dependent_activation, seed 001: "exp")
+    a(t) = a0 + (1 - a0) sin^2(pi t / Ta), t < Ta; a0 after  (seed 000's bell: "bell", Ta = tau_s)
 
 the seed's Eq. 3 integrated (Eqs. 4-5) with ``m0 = 0`` (baseline: zero moment
-at touchdown), seed 001's activation and the simulator's push-off shape. For
+at touchdown), seed 001's activation and the simulator's push-off shape.
+
+Choice (issue 16): a rate-dependent stiffness ``dM = K dphi`` (Eq. 3) has two readings of "rate": the
+signed velocity ``K = k0 + k3 (omega - omega0)`` (integrated: ``k3 S``) and the speed
+``K = k0 + k3 (|omega| - |omega0|)`` (``k3 S_speed``, ``rate_form="speed"``; lossless and time-reversible,
+since the stiffness then does not know whether the joint flexes or extends; the outside generator's form).
+They differ once the joint extends (omega < 0, second half of stance). The candidate identifies the signed
+form only: holding both regressors in the candidate (one more coefficient per joint) made it name a false
+rate-dependent stiffness on the outside angle recording and on a null of the second generator, and the
+outside rate law simulated through our model does not beat the baseline anyway (docs/discovery.md); the speed
+form represents that truth law (``bench/discovery_truth_gap.py``, tests). Likewise the activation's time course has two
+published shapes: seed 001's rise from ``a_min`` (``exp``) and seed 000's bell-shaped stiffness with its
+maximum near mid-stance and non-zero edge values (``bell``), and two readings of how it acts: on the elastic
+moment (``secant``, ``a(t) E``, as our simulator) or on the stiffness in Eq. 3 (``tangent``,
+``dM = a(t) K dphi``, integrated ``int a(t) dE``: the outside generator's form, checked on its stance truth:
+0.4 N m RMS against 32 N m for the secant reading); all four are on the candidate's grid. For
 fixed ``tau``, ``onset`` and ``duration`` the moment is linear in the
 coefficients (``a(t) E`` is written as ``E - exp(-t/tau) * sum_k c_k E_k``
 with one free ``c_k = (1 - a_min) k_k`` per elastic term), so each fit is
@@ -51,6 +69,8 @@ JOINT_EFFECTS = ("angle_dependent_stiffness", "rate_dependent_stiffness", "joint
                  "time_dependent_activation", "active_push_off")
 #: Grids of the nonlinear timing parameters (s).
 TAU_GRID_S = (0.01, 0.02, 0.03, 0.045, 0.06, 0.08, 0.11, 0.15)
+#: Bell activation periods ``Ta`` (s): the bell spans part of or the whole stance.
+BELL_GRID_S = (0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5)
 ONSET_GRID_S = tuple(np.round(np.arange(0.04, 0.26, 0.02), 3))
 DURATION_GRID_S = tuple(np.round(np.arange(0.08, 0.32, 0.03), 3))
 
@@ -64,7 +84,14 @@ class ModelSpec:
     effects : tuple of str
         Names from :data:`EFFECT_NAMES`, in the order added.
     tau_s, onset_s, duration_s : float
-        Activation time constant and push-off timing (s); used only with those effects.
+        Activation time constant (``exp``) or period ``Ta`` (``bell``) and push-off timing (s); used only
+        with those effects.
+    activation_shape : str
+        ``"exp"`` (seed 001) or ``"bell"`` (seed 000), see the module docstring.
+    activation_form : str
+        ``"secant"`` (``a(t)`` scales the elastic moment) or ``"tangent"`` (``dM = a(t) K dphi``).
+    rate_form : str
+        ``"signed"`` (``k3 S``, identified) or ``"speed"`` (``k3 S_speed``), see the module docstring.
     latency_s, offset_n : float
         Sensor model (s, N).
     compliance : tuple (c, p) or None
@@ -81,6 +108,9 @@ class ModelSpec:
 
     effects: tuple[str, ...] = ()
     tau_s: float = 0.04
+    activation_shape: str = "exp"
+    activation_form: str = "secant"
+    rate_form: str = "signed"
     onset_s: float = 0.1
     duration_s: float = 0.15
     latency_s: float = 0.0
@@ -128,7 +158,24 @@ def push_profile(t_s: np.ndarray, onset_s: float, duration_s: float) -> np.ndarr
     return np.where((phase >= 0) & (phase <= 1), np.sin(np.pi * np.clip(phase, 0, 1)) ** 2, 0.0)
 
 
-def features(spec: ModelSpec, t_s, dr, dw, s_int) -> np.ndarray:
+def activation_modulation(spec: ModelSpec, t_s) -> np.ndarray:
+    """``g(t)`` with ``a(t) E = E + sum_k c_k g(t) E_k`` (linear in ``c_k``): ``-exp(-t/tau)`` or the bell."""
+    t = np.maximum(np.asarray(t_s, float), 0.0)
+    if spec.activation_shape == "bell":
+        return np.where(t < spec.tau_s, np.sin(np.pi * t / spec.tau_s) ** 2, 0.0)
+    return -np.exp(-t / spec.tau_s)
+
+
+#: Elastic terms whose tangent-form activation integrals are law states (fixed order).
+ELASTIC_ALL = ("k0", "k1", "k2", "k3", "k3_speed")
+
+
+def elastic_rates(dr, w, w0) -> list:
+    """``dE_k/dt`` of :data:`ELASTIC_ALL` (``dr``, ``omega``, ``omega0`` broadcast)."""
+    return [w, dr * w, dr**2 * w, (w - w0) * w, (np.abs(w) - np.abs(w0)) * w]
+
+
+def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None) -> np.ndarray:
     """Regressor matrix of one joint, shape (N, len(feature_names(spec))).
 
     Parameters
@@ -137,14 +184,25 @@ def features(spec: ModelSpec, t_s, dr, dw, s_int) -> np.ndarray:
         Time since touchdown (s).
     dr, dw, s_int : ndarray, shape (N,)
         ``rho - rho0`` (rad), ``omega - omega0`` (rad/s), ``S`` (rad^2/s).
+    s_speed : ndarray, shape (N,)
+        ``S_speed`` (rad^2/s); needed only with ``rate_form="speed"``.
+    tangent : ndarray, shape (N, 5)
+        ``int g(t) dE_k`` of :data:`ELASTIC_ALL`; needed only with a tangent-form activation.
     """
     t_s, dr, dw, s_int = (np.asarray(a, float) for a in (t_s, dr, dw, s_int))
     cols = {"k0": dr, "k1": dr**2 / 2, "k2": dr**3 / 3, "k3": s_int, "b0": dw, "b1": dw**2 / 2}
+    if spec.rate_form == "speed":
+        cols["k3"] = s_speed
     el = [cols[e] for e in elastic_terms(spec)]
     out = list(el)
     if spec.has("time_dependent_activation"):
-        decay = np.exp(-np.maximum(t_s, 0.0) / spec.tau_s)
-        out += [-decay * e for e in el]
+        if spec.activation_form == "tangent":
+            speed = spec.rate_form == "speed"
+            out += [tangent[..., ELASTIC_ALL.index("k3_speed" if e == "k3" and speed else e)]
+                    for e in elastic_terms(spec)]
+        else:
+            g = activation_modulation(spec, t_s)
+            out += [g * e for e in el]
     if spec.has("joint_damping"):
         out += [cols["b0"], cols["b1"]]
     if spec.has("active_push_off"):
@@ -169,7 +227,13 @@ def stance_features(spec: ModelSpec, t_s, rho, omega) -> list[np.ndarray]:
     dr = rho - rho[0]
     dw = omega - omega[0]
     s_int = cumulative_trapezoid(dw * omega, t_s, axis=0, initial=0.0)
-    return [features(spec, t_s, dr[:, j], dw[:, j], s_int[:, j]) for j in range(3)]
+    s_speed = cumulative_trapezoid((np.abs(omega) - np.abs(omega[0])) * omega, t_s, axis=0, initial=0.0)
+    tangent = [None] * 3
+    if spec.has("time_dependent_activation") and spec.activation_form == "tangent":
+        g = activation_modulation(spec, t_s)
+        tangent = [np.stack([cumulative_trapezoid(g * r, t_s, initial=0.0)
+                             for r in elastic_rates(dr[:, j], omega[:, j], omega[0, j])], axis=-1) for j in range(3)]
+    return [features(spec, t_s, dr[:, j], dw[:, j], s_int[:, j], s_speed[:, j], tangent[j]) for j in range(3)]
 
 
 @dataclass(frozen=True)
@@ -189,19 +253,27 @@ class FittedLaw(ImpedanceLaw):
     coefficients: np.ndarray = field(default_factory=lambda: np.zeros((3, 1)))
     touchdown_moment_nm: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
-    n_states = 3
+    #: ``S`` and ``S_speed`` per joint, then ``int g(t) dE_k`` per term of :data:`ELASTIC_ALL` and joint
+    #: (state ``6 + 3 m + j``; integrated always, used with a tangent-form activation).
+    n_states = 6 + 3 * len(ELASTIC_ALL)
 
     def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102
         dr = np.asarray(rho, float) - ref.rho0_rad
         dw = np.asarray(omega, float) - ref.omega0_rad_s
         s = np.asarray(states, float)
         t = np.broadcast_to(np.asarray(t_s, float), dr.shape[:-1])
-        return np.stack([self.touchdown_moment_nm[j] + features(self.spec, t, dr[..., j], dw[..., j], s[..., j])
+        return np.stack([self.touchdown_moment_nm[j] + features(self.spec, t, dr[..., j], dw[..., j], s[..., j],
+                                                                s[..., 3 + j], s[..., 6 + j::3])
                          @ self.coefficients[j] for j in range(3)], axis=-1)
 
     def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102
         w = np.asarray(omega, float)
-        return (w - ref.omega0_rad_s) * w
+        w0 = ref.omega0_rad_s
+        g = activation_modulation(self.spec, t_s) if self.spec.has("time_dependent_activation") else 0.0
+        g = np.asarray(g, float)[..., None] if np.ndim(g) else g
+        dr = np.asarray(rho, float) - ref.rho0_rad
+        return np.concatenate([(w - w0) * w, (np.abs(w) - np.abs(w0)) * w]
+                              + [g * r for r in elastic_rates(dr, w, w0)], axis=-1)
 
     def to_dict(self) -> dict:  # noqa: D102
         names = feature_names(self.spec)

@@ -15,7 +15,6 @@ from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery.identify import SIGNALS, core, identify, residuals
 from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
 from hop_impedance.discovery.model import ModelSpec, feature_names
-from hop_impedance.discovery.selection import remaining
 from hop_impedance.recording import Recording
 
 SCHEMA = "hop_impedance.discover/1"
@@ -100,8 +99,13 @@ def parameters_of(spec: ModelSpec, coefs: np.ndarray, effect: str | None) -> dic
     if effect in (None, "angle_dependent_stiffness", "rate_dependent_stiffness", "joint_damping"):
         out = {"joint_law": law}
     elif effect == "time_dependent_activation":
-        a_min = {j: (1.0 - law[j]["act_k0"] / law[j]["k0"]) if law[j]["k0"] else None for j in JOINT_NAMES}
-        out = {"tau_s": spec.tau_s, "a_min": a_min, "joint_law": law}
+        if spec.activation_shape == "bell":  # k0 = kc a0, act_k0 = kc (1 - a0): a0 = k0 / (k0 + act_k0)
+            a_min = {j: law[j]["k0"] / (law[j]["k0"] + law[j]["act_k0"]) if law[j]["k0"] + law[j]["act_k0"] else None
+                     for j in JOINT_NAMES}
+        else:
+            a_min = {j: (1.0 - law[j]["act_k0"] / law[j]["k0"]) if law[j]["k0"] else None for j in JOINT_NAMES}
+        out = {"shape": spec.activation_shape, "form": spec.activation_form, "tau_s": spec.tau_s, "a_min": a_min,
+               "joint_law": law}
     elif effect == "active_push_off":
         out = {"onset_s": spec.onset_s, "duration_s": spec.duration_s,
                "amplitude_nm": {j: law[j]["push"] for j in JOINT_NAMES}, "joint_law": law}
@@ -173,7 +177,7 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
                           "rounds": []},
         }
         for _ in range(max_steps):
-            cands = remaining(spec)
+            cands = fs.remaining(spec)
             if not cands:
                 break
             t0 = time.perf_counter()
