@@ -464,6 +464,7 @@ def spin_node(node_factory, args=None) -> None:
                 raise SystemExit(f"error: {exc}") from None
             executor = make_executor()
             executor.add_node(node)
+            warm_up_logging()
             spin_until_shutdown(executor)
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
@@ -484,6 +485,72 @@ def spin_until_shutdown(executor) -> None:
     context = executor.context
     while rclpy.ok(context=context):
         executor.spin_once(timeout_sec=0.1)
+
+
+def warm_up_logging() -> None:
+    """Pay rclpy's one-time logging cost now, before the first stance, not inside a callback.
+
+    An rclpy logger call resolves its caller with ``inspect.getframeinfo``,
+    whose ``inspect.getmodule`` maps every module loaded so far to its
+    ``realpath`` the first time (later calls only look at modules imported
+    since). With the pipeline's ~1,250 modules that first call takes tens of
+    milliseconds on a loaded machine, and in one process it landed in
+    ``inverse_dynamics``' callback right after it published the first
+    ``StanceKinetics`` (its "body model scaled" note), so the estimator's
+    callback, the first stance's fit and its controller message waited for it
+    (the first stance's take-off -> controller latency of
+    bench/bench_pipeline.py, one process). Call this once the nodes are built
+    (their imports done) and before spinning.
+    """
+    import inspect
+
+    inspect.getframeinfo(inspect.currentframe())
+
+
+class DeferredPublisher:
+    """Publish a queue of messages in slices from a timer, after the callback that queued them returned.
+
+    ``inverse_dynamics`` has ~300 per-frame ``JointKinetics`` per stance;
+    publishing them in the callback that publishes the ``StanceKinetics``
+    (3-4 ms of message building and publishing) held every other callback of
+    a one-process executor, the estimator's included, until they were out.
+    Queued here, they go out ``per_tick`` at a time every ``period_s`` (the
+    timer runs only while something is queued); :meth:`flush` publishes the
+    rest at once (end of stream).
+    """
+
+    def __init__(self, node: Node, msg_type, topic: str, qos, period_s: float = 0.002, per_tick: int = 50) -> None:
+        self.publisher = node.create_publisher(msg_type, topic, qos)
+        self.per_tick = per_tick
+        self._queue: list = []  # callables or messages, oldest first
+        self._timer = node.create_timer(period_s, self._tick, autostart=False)
+
+    @property
+    def pending(self) -> int:
+        return len(self._queue)
+
+    def extend(self, build) -> None:
+        """Queue the messages ``build()`` returns (built at the first tick, not in the caller's callback)."""
+        self._queue.append(build)
+        if self._timer.is_canceled():
+            self._timer.reset()
+
+    def _tick(self) -> None:
+        self._publish(self.per_tick)
+
+    def flush(self) -> None:
+        self._publish(None)
+
+    def _publish(self, budget: int | None) -> None:
+        while self._queue and (budget is None or budget > 0):
+            head = self._queue[0]
+            if callable(head):
+                self._queue[:1] = list(head())  # the builder's messages, in order
+                continue
+            self.publisher.publish(self._queue.pop(0))
+            budget = None if budget is None else budget - 1
+        if not self._queue:
+            self._timer.cancel()
 
 
 def make_executor(kind: str = "events"):

@@ -28,7 +28,10 @@ Thin adapter around :class:`hop_impedance.biomech.stages.StanceAnalysisStage`:
 - Output per stance: ``StanceKinetics`` on ``/stance/kinetics`` (whole
   stance, reliable) and, if ``publish_frames``, one ``JointKinetics`` per
   force frame of the stance on ``/joint_kinetics`` (published after the
-  analysis of the stance, since the zero-lag filters need the whole window).
+  analysis of the stance, since the zero-lag filters need the whole window,
+  and after its ``StanceKinetics``: 50 frames per 2 ms timer tick, so they
+  do not delay the estimator; all of them before ``finished`` at the end of
+  a replayed stream).
 - Stances are found by the same detector stage as ``stance_detector``'s, with
   the same parameters (:func:`stance_detector.declare_detector_options`) and
   body weight, so the analysed stances are the published ``/stance/events``.
@@ -60,7 +63,7 @@ from hop_impedance.biomech.analysis import AnalysisOptions, StanceResult
 from hop_impedance.biomech.per_leg import leg_subject
 from hop_impedance.biomech.stages import StanceAnalysisStage
 from hop_impedance.nodes.common import (
-    END_TOPIC, JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC, Diagnostics, InputTracker, ProgressReporter,
+    END_TOPIC, JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC, DeferredPublisher, Diagnostics, InputTracker, ProgressReporter,
     InputGuard, ReorderBuffer, declare, declare_stream_parameters, seconds_to_ns, set_stamp, stamp_ns, wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import history_qos, input_qos, latched_qos, result_qos
@@ -113,7 +116,8 @@ class InverseDynamicsNode(Node):
         self.lost_after_last = 0
         self.analysis_s: list[float] = []
         self.pub_stance = self.create_publisher(StanceKinetics, STANCE_KINETICS_TOPIC, history_qos())  # late joiners
-        self.pub_frames = self.create_publisher(JointKinetics, JOINT_KINETICS_TOPIC, result_qos(2000))
+        # per-frame JointKinetics go out from later timer ticks, after the StanceKinetics (common.DeferredPublisher)
+        self.pub_frames = DeferredPublisher(self, JointKinetics, JOINT_KINETICS_TOPIC, result_qos(2000))
         self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
         self.create_subscription(WrenchStamped, self.force_topic, self._on_wrench, input_qos(reliable), raw=True)
         self.create_subscription(MarkerArray, MARKER_TOPIC, self._on_markers, input_qos(reliable))
@@ -179,6 +183,7 @@ class InverseDynamicsNode(Node):
             self.get_logger().warning(
                 f"{self.sorted_force.lost} force samples lost: {self.lost_between_stances} before reported stances, "
                 f"{self.lost_after_last} after the last one; stances with losses inside were rejected")
+        self.pub_frames.flush()  # every frame out before the node reports finished
         self.diagnostics.publish()  # the final counts, at once
         self.progress.finished = True
         self.progress.stances_out = self.stances_out
@@ -293,8 +298,10 @@ class InverseDynamicsNode(Node):
         self.stances_out += 1
         self.rejected += res.rejection_reason is not None
         if self.publish_frames and res.joints is not None:
-            for frame in frame_messages(res, self.t0_ns):
-                self.pub_frames.publish(frame)
+            # built and published from later ticks, so the estimator's callback (one process) and this node's
+            # next samples do not wait behind ~300 messages (3-4 ms); the stance kinetics are already out
+            t0_ns = self.t0_ns
+            self.pub_frames.extend(lambda: frame_messages(res, t0_ns))
 
     def _diag_values(self) -> dict:
         out = {}

@@ -28,6 +28,7 @@ from rclpy.node import Node
 from hop_impedance.child_env import child_env
 from hop_impedance.nodes.common import (
     CONTROLLER_TOPIC, DIAGNOSTICS_TOPIC, PROFILE_TOPIC, PROGRESS_TOPIC, STANCE_KINETICS_TOPIC, SUMMARY_TOPIC, stamp_ns,
+    warm_up_logging,
 )
 from hop_impedance.nodes.qos import latched_qos, result_qos
 from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC
@@ -275,6 +276,7 @@ def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
         executor = _executor_for(context)
         for n in nodes:
             executor.add_node(n)
+        warm_up_logging()  # else the first log call in a callback costs tens of ms (the first stance's latency)
         _spin_until_done(executor, collector, cfg, t0)
         _wait_for_bridge(executor, nodes, len(collector.report.summaries))
         replay = nodes[-1]

@@ -76,6 +76,17 @@ def test_separate_processes_match_offline_analyze(tmp_path, offline):
     counts = {i.topic: i.count for i in summarize(report.output_mcap)}
     assert counts["/force_plate/wrench"] == inputs["/force_plate/wrench"] and counts["/impedance/stance_summary"] == 10
     assert counts["/impedance/profile"] == 30
+    # per-frame kinetics go out in slices after each stance (common.DeferredPublisher): every force frame of every
+    # analysed stance, once, stamped inside its stance
+    from hop_impedance.io.mcap_io import MessageStream
+    from hop_impedance.nodes.common import JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC
+
+    stances = {m.message.stance_index: m.message for m in MessageStream(report.output_mcap, topics=[STANCE_KINETICS_TOPIC])}
+    frames = [m.message for m in MessageStream(report.output_mcap, topics=[JOINT_KINETICS_TOPIC])]
+    assert len(frames) == sum(len(k.time_s) for k in stances.values()) > 10 * 100
+    for f in frames:
+        k = stances[f.stance_index]
+        assert stamp_ns(k.touchdown_stamp) <= stamp_ns(f.header.stamp) <= stamp_ns(k.takeoff_stamp)
     # one controller message per stance, all valid, and the start message (nothing valid) before them: at
     # rate 0 the runner turns the feed's wall-clock age rule off (issue 21; a backlog is no staleness there)
     from hop_impedance.io.mcap_io import MessageStream
