@@ -19,6 +19,7 @@ topic                          type                                        publi
 
 from __future__ import annotations
 
+import math
 import struct
 import time
 from dataclasses import dataclass, field
@@ -508,21 +509,24 @@ def warm_up_logging() -> None:
 
 
 class DeferredPublisher:
-    """Publish a queue of messages in slices from a timer, after the callback that queued them returned.
+    """Publish a queue of messages in slices from a timer, ``delay_s`` after the callback that queued them.
 
-    ``inverse_dynamics`` has ~300 per-frame ``JointKinetics`` per stance;
-    publishing them in the callback that publishes the ``StanceKinetics``
-    (3-4 ms of message building and publishing) held every other callback of
-    a one-process executor, the estimator's included, until they were out.
-    Queued here, they go out ``per_tick`` at a time every ``period_s`` (the
-    timer runs only while something is queued); :meth:`flush` publishes the
-    rest at once (end of stream).
+    ``inverse_dynamics`` has ~300 per-frame ``JointKinetics`` per stance.
+    Published in the callback that publishes the ``StanceKinetics`` (3-4 ms
+    of message building and publishing), they held every other callback of a
+    one-process executor, the estimator's included, until they were out; with
+    separate processes they competed for the two cores with the estimator's
+    fit. Queued here, they go out ``per_tick`` at a time every ``period_s``,
+    starting ``delay_s`` after they were queued (the timer runs only while
+    something is queued); :meth:`flush` publishes the rest at once (end of
+    stream).
     """
 
-    def __init__(self, node: Node, msg_type, topic: str, qos, period_s: float = 0.002, per_tick: int = 50) -> None:
+    def __init__(self, node: Node, msg_type, topic: str, qos, delay_s: float = 0.04, period_s: float = 0.002,
+                 per_tick: int = 50) -> None:
         self.publisher = node.create_publisher(msg_type, topic, qos)
-        self.per_tick = per_tick
-        self._queue: list = []  # callables or messages, oldest first
+        self.delay_s, self.per_tick = delay_s, per_tick
+        self._queue: list[tuple[float, object]] = []  # (due monotonic s, message or builder), oldest first
         self._timer = node.create_timer(period_s, self._tick, autostart=False)
 
     @property
@@ -530,24 +534,25 @@ class DeferredPublisher:
         return len(self._queue)
 
     def extend(self, build) -> None:
-        """Queue the messages ``build()`` returns (built at the first tick, not in the caller's callback)."""
-        self._queue.append(build)
+        """Queue the messages ``build()`` returns (built when they are due, not in the caller's callback)."""
+        self._queue.append((time.monotonic() + self.delay_s, build))
         if self._timer.is_canceled():
             self._timer.reset()
 
     def _tick(self) -> None:
-        self._publish(self.per_tick)
+        self._publish(self.per_tick, time.monotonic())
 
     def flush(self) -> None:
-        self._publish(None)
+        self._publish(None, math.inf)
 
-    def _publish(self, budget: int | None) -> None:
-        while self._queue and (budget is None or budget > 0):
-            head = self._queue[0]
+    def _publish(self, budget: int | None, now: float) -> None:
+        while self._queue and self._queue[0][0] <= now and (budget is None or budget > 0):
+            due, head = self._queue[0]
             if callable(head):
-                self._queue[:1] = list(head())  # the builder's messages, in order
+                self._queue[:1] = [(due, m) for m in head()]  # the builder's messages, in order
                 continue
-            self.publisher.publish(self._queue.pop(0))
+            self._queue.pop(0)
+            self.publisher.publish(head)
             budget = None if budget is None else budget - 1
         if not self._queue:
             self._timer.cancel()

@@ -29,9 +29,9 @@ Thin adapter around :class:`hop_impedance.biomech.stages.StanceAnalysisStage`:
   stance, reliable) and, if ``publish_frames``, one ``JointKinetics`` per
   force frame of the stance on ``/joint_kinetics`` (published after the
   analysis of the stance, since the zero-lag filters need the whole window,
-  and after its ``StanceKinetics``: 50 frames per 2 ms timer tick, so they
-  do not delay the estimator; all of them before ``finished`` at the end of
-  a replayed stream).
+  and after its ``StanceKinetics``: from 40 ms after it, 50 frames per 2 ms
+  timer tick, so they neither delay nor compete with the estimator's fit;
+  all of them before ``finished`` at the end of a replayed stream).
 - Stances are found by the same detector stage as ``stance_detector``'s, with
   the same parameters (:func:`stance_detector.declare_detector_options`) and
   body weight, so the analysed stances are the published ``/stance/events``.
