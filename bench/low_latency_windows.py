@@ -12,6 +12,11 @@ default) that moved by more than 2 percentage points: issue 15 requires none.
     nice -n 10 .venv/bin/python bench/low_latency_windows.py 0.005
     nice -n 10 .venv/bin/python bench/low_latency_windows.py 0.005 0.01 0.05 --frequencies 2.2
 
+Experiments on the treatment: ``--marker-fit DEGREE FRAMES`` changes the marker extrapolation
+(``analysis.MARKER_FIT_DEGREE`` / ``MARKER_FIT_FRAMES``, default 1 2); ``--true-markers-s H`` gives
+each short window the recorded marker frames up to ``H`` s past its end (not known live), e.g.
+``0.005 --true-markers-s 0.3``: the force treatment alone, with markers as in batch.
+
 CPU: about 25 s per frequency per analysis (batch + each PAD), as recovery_errors.py.
 """
 
@@ -46,7 +51,24 @@ def main() -> None:
     parser.add_argument("--hops", type=int, default=4)
     parser.add_argument("--clean-cutoff", type=float, default=40.0)
     parser.add_argument("--noisy-cutoff", type=float, default=12.0)
+    parser.add_argument("--marker-fit", type=int, nargs=2, metavar=("DEGREE", "FRAMES"),
+                        help="marker extrapolation polynomial (default: analysis' constants)")
+    parser.add_argument("--true-markers-s", type=float, default=0.0, metavar="H",
+                        help="give each short window the recorded markers up to H s past its end")
     args = parser.parse_args()
+    if args.marker_fit:
+        analysis.MARKER_FIT_DEGREE, analysis.MARKER_FIT_FRAMES = args.marker_fit
+    if args.true_markers_s > 0:
+        known_span = analysis.window_span
+
+        def window_span(data, start_s, end_s):
+            span, later = known_span(data, start_s, end_s), known_span(data, start_s, end_s + args.true_markers_s)
+            span.marker_t_s, span.markers_xz = later.marker_t_s, later.markers_xz
+            return span
+
+        analysis.window_span = window_span  # analyze_short_window looks it up at call time
+    print(f"marker extrapolation: degree {analysis.MARKER_FIT_DEGREE}, {analysis.MARKER_FIT_FRAMES} frames"
+          + (f"; recorded markers up to {args.true_markers_s * 1e3:g} ms past each window's end" if args.true_markers_s else ""))
     cpu0 = time.process_time()
     cutoffs = {"clean": args.clean_cutoff, "noisy": args.noisy_cutoff}
     batch_analyze = analysis.analyze_recording

@@ -395,24 +395,24 @@ def extend_past_window(span: SpanData, stances: list[Stance], k: int, options: A
       two frames (constant velocity). A marker whose last frame is missing
       is not extrapolated (its gap runs to the edge, as before).
 
-    Measured (``bench/low_latency_windows.py``'s comparison with batch, 36
-    cells of k0/k1 median recovery errors; cells moved by more than 2
-    percentage points at PAD = 5 / 10 / 20 / 50 ms): straight line through 2
-    frames 25 / 19 / 10 / 2; quadratic through 4 frames 24 / 18 / 14 / 3;
-    straight line fitted to 3 or 4 frames 21-22 / 19-21 / 16-19 / 4-5.
-    Also tried at 5 ms and dropped: point reflection about the last frame
-    (the filter's own odd padding) 26; quadratic or cubic over 3-20 frames
-    23-30; a "ballistic" model (whole-body centre of mass moving with the
-    plate's F/m - g, exactly -g after take-off, segment angles continued by
-    a polynomial, toe placed where the COM puts it) 20-28. The force
-    treatment alone is exact: with the true markers after the window end,
-    0 of 36 cells move (largest 1.9 pp). What no extrapolation from the
-    frames before take-off gives is the motion after it: on clean simulated
-    data the segment angular accelerations change by 50-100 rad/s^2 within
-    10-20 ms around take-off (the plate force drops), and the batch
-    filters average 30-50 ms of that motion into the stance's end. Even
-    the true markers up to take-off + 15 / 25 / 35 / 55 ms (then a
-    quadratic) leave 19 / 7 / 5 / 3 cells moved.
+    Measured by ``bench/low_latency_windows.py`` (36 cells of k0/k1 median
+    recovery errors against batch; cells moved by more than 2 percentage
+    points): at PAD = 5 / 10 / 20 / 50 / 70 ms 25 / 19 / 10 / 2 / 0 with the
+    straight line through 2 frames; at 5 / 20 / 50 ms 24 / 14 / 3 with a
+    quadratic through 4 frames (``--marker-fit 2 4``; largest move clean
+    7.8 / 6.7 / 0.2 pp, noisy 34.6 / 30.2 / 5.8 pp, against 43.4 / 6.3 / 0.4
+    and 61.0 / 13.4 / 2.8 pp with the line). The force treatment alone is exact: with the
+    recorded markers after the window end (``0.005 --true-markers-s 0.3``)
+    0 of 36 move (largest 0.1 pp clean, 1.9 pp noisy). The markers are the
+    limit: around a take-off the segment angular accelerations change within
+    a few marker frames (the plate force drops), the batch filters average
+    the motion of the following flight into the stance's end, and no
+    extrapolation from the frames before the take-off knows that motion.
+    Also tried in scratch runs and not kept, as no better at 5 ms: the
+    filter's own odd padding (point reflection about the last frame),
+    higher-degree polynomials, and a ballistic model (whole-body centre of
+    mass moving with F/m - g, segment angles continued by a polynomial, toe
+    placed where the COM puts it).
 
     Returns a new :class:`SpanData`; ``span`` is not changed.
     """
