@@ -98,6 +98,10 @@ class AnalysisOptions:
     calibration_s: float | None = 1.0
     post_takeoff_s: float | None = None
 
+    def __post_init__(self) -> None:
+        if self.post_takeoff_s is not None and not self.post_takeoff_s > 0:
+            raise ValueError(f"post_takeoff_s must be > 0 s (or None for the whole record), got {self.post_takeoff_s}")
+
 
 @dataclass
 class JointSeries:

@@ -122,3 +122,9 @@ def test_marker_extrapolation_continues_constant_velocity():
     np.testing.assert_array_equal(extended.wrench[extended.force_t_s > 0.4], 0.0)  # the flight before: no offset
     assert extended.force_t_s[-1] >= 0.4 + analysis.TAIL_S - 0.001
     assert extended.marker_t_s[-1] >= extended.force_t_s[-1]
+
+
+@pytest.mark.parametrize("pad", [0.0, -0.005])
+def test_post_takeoff_must_be_positive(pad):
+    with pytest.raises(ValueError, match="post_takeoff_s must be > 0"):
+        AnalysisOptions(post_takeoff_s=pad)
