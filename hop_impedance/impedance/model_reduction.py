@@ -231,7 +231,7 @@ class _OlsDowndate:
         ``1 / sqrt(p trace(H_kept))``, must be at least ``min_ratio``.
         """
         h = self.H.diagonal()[columns]
-        if not _ratio_bound_at_least(len(columns), float(h.sum()), min_ratio):
+        if not well_conditioned(len(columns), float(h.sum()), min_ratio):
             return None
         return h / self.norms[columns] ** 2
 
@@ -280,10 +280,10 @@ def _certainly_full_rank_ols(design: np.ndarray, y: np.ndarray) -> _OlsDowndate 
         ols = _OlsDowndate(design / norms, y, norms)
     except np.linalg.LinAlgError:
         return None
-    return ols if _ratio_bound_at_least(design.shape[1], float(np.trace(ols.H)), 1e-8) else None
+    return ols if well_conditioned(design.shape[1], float(np.trace(ols.H)), 1e-8) else None
 
 
-def _ratio_bound_at_least(p: int, trace: float, limit: float) -> bool:
+def well_conditioned(p: int, trace: float, limit: float) -> bool:
     """Whether ``1 / sqrt(p trace)``, a lower bound of sigma_min / sigma_max of a unit-column design
     whose ``(X_s^T X_s)^-1`` has this trace, is at least ``limit`` (False for a non-finite or non-positive trace)."""
     return math.isfinite(trace) and trace > 0.0 and p * trace <= limit**-2

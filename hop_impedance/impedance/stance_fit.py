@@ -57,6 +57,7 @@ from hop_impedance.impedance.model_reduction import (
     ReductionResult,
     drop_terms_held_at_zero,
     reduce_model,
+    well_conditioned,
 )
 from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares, QpSolution
 from hop_impedance.impedance.regression_model import (
@@ -264,8 +265,12 @@ def _standard_errors(X: np.ndarray, sse: float, n_eff: float, variance_factors: 
     """OLS standard errors sqrt(sigma^2 diag((X^T X)^-1) n / n_eff) of each column.
 
     ``variance_factors`` is ``diag((X^T X)^-1)`` when already known (the
-    reduction's downdated OLS); otherwise it is computed (pseudo-inverse of
-    the column-scaled Gram matrix).
+    reduction's downdated OLS); otherwise it is computed from the
+    column-scaled Gram matrix: its inverse when the design is well
+    conditioned by the reduction's own rule (sigma_min / sigma_max bound at
+    least 1e-6, :func:`~hop_impedance.impedance.model_reduction.well_conditioned`),
+    else its pseudo-inverse. (The inverse is the cheaper LAPACK call of the
+    two; where both apply they agree to round-off.)
     """
     n, p = X.shape
     sigma2 = sse / max(n - p, 1)
@@ -273,8 +278,14 @@ def _standard_errors(X: np.ndarray, sse: float, n_eff: float, variance_factors: 
         return np.sqrt(np.maximum(variance_factors, 0.0) * sigma2 * n / n_eff)
     norms = np.linalg.norm(X, axis=0)
     Xs = X / norms
-    cov_s = np.linalg.pinv(Xs.T @ Xs)
-    return np.sqrt(np.maximum(np.diag(cov_s), 0.0) * sigma2 * n / n_eff) / norms
+    gram = Xs.T @ Xs
+    try:
+        h = np.linalg.inv(gram).diagonal()
+    except np.linalg.LinAlgError:
+        h = None
+    if h is None or not well_conditioned(p, float(h.sum()), 1e-6):
+        h = np.linalg.pinv(gram).diagonal()
+    return np.sqrt(np.maximum(h, 0.0) * sigma2 * n / n_eff) / norms
 
 
 @dataclass(frozen=True)
