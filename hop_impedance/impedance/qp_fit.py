@@ -532,17 +532,14 @@ class ConstrainedLeastSquares:
         solver : osqp.OSQP
             Workspace, already set up and warm-started.
         configure : callable
-            ``configure(polishing, eps)`` applies OSQP's polishing and
-            eps_abs = eps_rel settings to ``solver``.
+            ``configure(polishing, eps)`` sets OSQP's polishing and eps_abs = eps_rel.
         rows : ndarray, shape (k, p)
             Scaled constraint rows (lower bound 0), OSQP's first ``k`` rows.
         k : int
         exact : callable
-            ``exact(result) -> bool`` for a solved, polished result (e.g. the
-            multiplier sign check).
+            ``exact(result) -> bool`` for a solved, polished result (the multiplier sign check).
         accept_unpolished : bool
-            Accept the first solved stage as it is (the unconstrained optimum is
-            feasible: nothing is active, nothing to polish).
+            Accept the first solved stage as it is (a feasible unconstrained optimum: nothing to polish).
 
         Returns
         -------
