@@ -534,8 +534,7 @@ class ConstrainedLeastSquares:
         configure : callable
             ``configure(polishing, eps)`` sets OSQP's polishing and eps_abs = eps_rel.
         rows : ndarray, shape (k, p)
-            Scaled constraint rows (lower bound 0), OSQP's first ``k`` rows.
-        k : int
+            Scaled constraint rows (lower bound 0), OSQP's first ``k = len(rows)`` rows.
         exact : callable
             ``exact(result) -> bool`` for a solved, polished result (the multiplier sign check).
         accept_unpolished : bool
