@@ -20,6 +20,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -68,6 +69,12 @@ class PipelineConfig:
         ROS 2 YAML parameter file for the nodes (``config/pipeline.yaml``).
     overrides : dict
         ``{node: {parameter: value}}`` on top of everything else (benchmarks, tests).
+    ready_to_play : callable or None
+        The replay starts only once this returns True (polled while the nodes spin, bounded by
+        ``timeout_s``), e.g. a benchmark's own controller listener has matched the feed's
+        publisher (``subscription.get_publisher_count() > 0``): the feed keeps only its latest
+        message (depth 1), so a listener matched after the first stances never sees them
+        (measured: the one-process latency bench heard 8 of 10 stances, missing stances 0 and 1).
     """
 
     recording: str
@@ -83,6 +90,7 @@ class PipelineConfig:
     params_file: str | None = None
     loop: bool = False
     overrides: dict = field(default_factory=dict)
+    ready_to_play: Callable[[], bool] | None = None
 
     @property
     def with_rerun(self) -> bool:
@@ -234,12 +242,12 @@ def _raising_node(exc: BaseException) -> str:
 
 
 def _in_process_nodes(cfg: PipelineConfig, context) -> list[Node]:
+    """Every node but the replay (:func:`_replay_node`)."""
     from rclpy.parameter import Parameter
 
     from hop_impedance.nodes.impedance_estimator import ImpedanceEstimatorNode
     from hop_impedance.nodes.inverse_dynamics import InverseDynamicsNode
     from hop_impedance.nodes.recorder import RecorderNode
-    from hop_impedance.nodes.replay import ReplayNode
     from hop_impedance.nodes.stance_detector import StanceDetectorNode
 
     params = node_parameters(cfg)
@@ -250,8 +258,17 @@ def _in_process_nodes(cfg: PipelineConfig, context) -> list[Node]:
         nodes.append(cls(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in params[name].items()]))
     if cfg.with_rerun:
         nodes.extend(_rerun_nodes(context, params["rerun_bridge"]))
-    nodes.append(ReplayNode(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in params["replay"].items()]))
     return nodes
+
+
+def _replay_node(cfg: PipelineConfig, context) -> Node:
+    """The replay (last: it starts playing once its subscribers are matched)."""
+    from rclpy.parameter import Parameter
+
+    from hop_impedance.nodes.replay import ReplayNode
+
+    params = node_parameters(cfg)["replay"]
+    return ReplayNode(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in params.items()])
 
 
 def _rerun_nodes(context, params: dict) -> list[Node]:
@@ -276,6 +293,9 @@ def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
         executor = _executor_for(context)
         for n in nodes:
             executor.add_node(n)
+        _wait_until_ready(executor, cfg, t0 + cfg.timeout_s)
+        nodes.append(_replay_node(cfg, context))
+        executor.add_node(nodes[-1])
         warm_up_logging()  # else the first log call in a callback costs tens of ms (the first stance's latency)
         _spin_until_done(executor, collector, cfg, t0)
         _wait_for_bridge(executor, nodes, len(collector.report.summaries))
@@ -392,6 +412,15 @@ def _wait_for_graph(executor, node: Node, expected: dict[str, int], deadline: fl
         executor.spin_once(timeout_sec=0.05)
 
 
+def _wait_until_ready(executor, cfg: PipelineConfig, deadline: float, alive=lambda: None) -> None:
+    """Spin until ``cfg.ready_to_play()`` holds (or raise at ``deadline``); nothing to wait for without it."""
+    while cfg.ready_to_play is not None and not cfg.ready_to_play():
+        if time.monotonic() > deadline:
+            raise ValueError("not ready to play in time (PipelineConfig.ready_to_play never held)")
+        alive()
+        executor.spin_once(timeout_sec=0.05)
+
+
 def _watch(children: dict[str, subprocess.Popen], log_dir: Path):
     """A check that raises :class:`NodeDied` when a child exited with an error (the replay exits 0 when done)."""
 
@@ -423,6 +452,7 @@ def _run_processes(cfg: PipelineConfig) -> PipelineReport:
         alive = _watch(children, log_dir)
         try:
             _wait_for_graph(executor, collector, ready_subscriptions(cfg), t0 + cfg.timeout_s, alive)
+            _wait_until_ready(executor, cfg, t0 + cfg.timeout_s, alive)
         except NodeDied as exc:
             collector.report.died = str(exc)
         else:
