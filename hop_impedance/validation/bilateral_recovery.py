@@ -71,7 +71,8 @@ def bilateral_from_trials(left, right, seed: int, noisy: bool = False):
 
 
 def recover_legs(freq_hz: dict[str, float], seed: int, *, n_hops: dict[str, int] | int = 4, cutoff_hz: float = 40.0,
-                 noisy: bool = False, lumped: bool = False):
+                 noisy: bool = False, lumped: bool = False, rigid: bool = True,
+                 skip_first: int = 0):
     """Simulate, build, analyse per leg and fit; per leg a :class:`RecoveryResult` against ``SHARE`` x its law.
 
     ``freq_hz`` maps ``"left"``/``"right"`` to the hop frequency whose seed
@@ -79,7 +80,11 @@ def recover_legs(freq_hz: dict[str, float], seed: int, *, n_hops: dict[str, int]
     the faster leg needs more hops to last as long, the recording is cut to the
     shorter trial). Returns ``(results, analyses, fits)``, plus with ``lumped``
     the same recovery by the lumped analysis of each leg's whole trial (the
-    v1 path on the unsplit recording), ``{side: RecoveryResult}``.
+    v1 path on the unsplit recording), ``{side: RecoveryResult}``. ``rigid``: the per-leg kinematics
+    (:func:`~hop_impedance.biomech.per_leg.analyze_leg`; False = the leg's markers as measured).
+    ``skip_first``: simulated stances not compared at the start of each trial
+    (:func:`~hop_impedance.validation.coefficient_recovery.compare_with_law`; the first lands from
+    the same lead-in whatever the seed, so it is one hop however many seeds are pooled).
     """
     from hop_impedance.biomech.analysis import AnalysisOptions
     from hop_impedance.biomech.per_leg import analyze_legs, fit_legs
@@ -88,10 +93,11 @@ def recover_legs(freq_hz: dict[str, float], seed: int, *, n_hops: dict[str, int]
     hops = n_hops if isinstance(n_hops, dict) else {side: n_hops for side in freq_hz}
     trials = {side: simulate_law_trial(f, seed, hops[side]) for side, f in freq_hz.items()}
     bilateral, truths, trial_recordings = bilateral_from_trials(trials["left"], trials["right"], seed, noisy)
-    analyses = analyze_legs(bilateral, AnalysisOptions(marker_cutoff_hz=cutoff_hz, force_cutoff_hz=cutoff_hz))
+    analyses = analyze_legs(bilateral, AnalysisOptions(marker_cutoff_hz=cutoff_hz, force_cutoff_hz=cutoff_hz), rigid)
     options = replace(default_fit_options(analyses["left"].options), reduce=False, terms=LAW_TERMS)
     fits = fit_legs(analyses, options)
-    results = {side: compare_with_law(analyses[side], fits[side], truths[side], law_scale=SHARE) for side in ("left", "right")}
+    results = {side: compare_with_law(analyses[side], fits[side], truths[side], law_scale=SHARE, skip_first=skip_first)
+               for side in ("left", "right")}
     if not lumped:
         return results, analyses, fits
     from hop_impedance.biomech.analysis import analyze_recording
@@ -101,6 +107,7 @@ def recover_legs(freq_hz: dict[str, float], seed: int, *, n_hops: dict[str, int]
     for side in ("left", "right"):
         whole = trial_recordings[side]
         analysis = analyze_recording(whole, AnalysisOptions(marker_cutoff_hz=cutoff_hz, force_cutoff_hz=cutoff_hz))
-        lumped_results[side] = compare_with_law(analysis, fit_recording(analysis, options), truths[side])
+        lumped_results[side] = compare_with_law(analysis, fit_recording(analysis, options), truths[side],
+                                                skip_first=skip_first)
     return results, analyses, fits, lumped_results
 

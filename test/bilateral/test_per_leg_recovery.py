@@ -4,8 +4,32 @@ Construction and limits: :mod:`hop_impedance.validation.bilateral_recovery`
 (left leg = a seed Table 2 trial at 2.20 Hz, right leg = one at 1.87 Hz, each
 plate half its trial's ground wrench; each leg's truth = half its trial's
 law). Seeds 11-14, 4 hops, noise-free, analysed at 40 Hz: the lumped
-recovery test's trials and settings (test/impedance/test_simulated_recordings.py).
-Same figures: ``.venv/bin/python bench/per_leg_recovery.py``.
+recovery test's trials and settings (test/impedance/test_simulated_recordings.py),
+and its rule: each median within the 2 % target, a combination that misses it
+marked ``xfail(strict=True)`` with the measured figure (it fails loudly the day
+it passes). Same figures: ``.venv/bin/python bench/per_leg_recovery.py``.
+
+The one miss at these seeds, left (2.20 Hz) hip k1 +2.31 % (lumped analysis of
+the same cut trials +1.79 %), measured with ``bench/per_leg_recovery.py``
+(bootstrap intervals and paired per-stance per-leg - lumped differences):
+
+- Not the construction: with the leg's markers as measured (``--measured``)
+  each leg's moments are half the lumped ones to 0.000 % of peak (segment
+  halving and "half its law" are exact); the per-leg stance then ends 1.1-2.0 ms
+  earlier (seed 11) (the detector's levels are fractions of the whole body weight, the
+  plate carries half), which alone moves one stance's hip k1 by up to a few
+  points (paired SD 2.1 points left, 1.2 right).
+- Not the 200 Hz pass-through: at 450 Hz no figure moves by more than 0.02.
+- The rigid-fit kinematics (spline to 1 kHz, then 40 Hz) shift the hip k1:
+  paired per-leg - lumped median +0.95 [+0.43, +3.23] points left and +3.37
+  [+1.62, +4.04] right on these seeds; over seeds 11-30 (each trial's first
+  stance, the same hop in every seed, counted once: ``--seeds $(seq 11 30)
+  --first-once``) +0.35 [-0.32, +2.10] left (sampling) and +2.37 [+1.92,
+  +3.05] right (systematic). Their hip moments are the closer to the
+  simulator's truth (seed 11, RMS 0.9-3.1 % of its peak against 4.7-6.0 %).
+- Over seeds 11-30 the 2.20 Hz hip k1 misses 2 % per leg (+4.37 %) and
+  lumped (+3.54 %) alike, and the right per-leg hip k1 too (+2.73 %, lumped
+  +0.05 %): the 4-seed passes of those are draws of seeds 11-14, not margins.
 """
 
 from __future__ import annotations
@@ -19,6 +43,8 @@ from hop_impedance.validation.coefficient_recovery import JOINTS, RecoveryResult
 SEEDS = (11, 12, 13, 14)
 FREQ_HZ = {"left": 2.20, "right": 1.87}
 TARGET = 0.02  # the lumped noise-free target (bench/recovery_errors.py, test_simulated_recordings.TOLERANCE)
+#: (side, joint, coefficient) -> measured |median error| where the target is missed (bench/per_leg_recovery.py).
+MISSED_TARGETS = {("left", "hip", "k1"): 0.0231}
 
 
 @pytest.fixture(scope="module")
@@ -34,25 +60,23 @@ def pooled():
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("coefficient", ["k0", "k1"])
 @pytest.mark.parametrize("side", ["left", "right"])
 @pytest.mark.parametrize("joint", JOINTS)
-def test_each_leg_recovers_its_own_law(pooled, side, joint):
+def test_each_leg_recovers_its_own_law(pooled, side, joint, coefficient, request):
     """Measured median k0 / k1 errors (%), default per-leg analysis (rigid-segment fit): left (2.20 Hz law)
     ankle +0.56/-0.06, knee +0.53/-0.95, hip -1.02/+2.31; right (1.87 Hz law) ankle +0.72/-0.11, knee
-    +0.63/-0.30, hip -0.03/+0.28. Within 2 % except left hip k1 (+2.31 %), where the lumped analysis of the
-    same (cut) trial gets +1.79 %: where a per-leg figure misses 2 %, it is held to the lumped one of the same
-    trials within 0.75 points instead (the hip's k1 is the least determined coefficient at 40 Hz on 100 Hz
-    markers; with the measured markers, rigid=False, it was the right hip: -2.20 % against -1.59 %)."""
+    +0.63/-0.30, hip -0.03/+0.28. All within 2 % except left hip k1 (module docstring)."""
+    missed = MISSED_TARGETS.get((side, joint, coefficient))
+    if missed is not None:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=f"measured about {missed:.2%} (target {TARGET:.0%})"))
     errors = pooled["per_leg", side].error_array(joint)
     lumped = pooled["lumped", side].error_array(joint)
     assert errors.shape[0] >= 3 * len(SEEDS) and errors.shape[0] == lumped.shape[0]
-    median, lumped_median = np.median(errors, axis=0), np.median(lumped, axis=0)
-    print(f"{side} {joint}: per-leg median k0/k1 {np.round(100 * median, 2)} %, lumped {np.round(100 * lumped_median, 2)} %")
-    assert abs(median[0]) < TARGET
-    if joint == "hip":
-        assert abs(median[1]) < TARGET or abs(median[1] - lumped_median[1]) < 0.0075
-    else:
-        assert abs(median[1]) < TARGET
+    c = ("k0", "k1").index(coefficient)
+    median, lumped_median = np.median(errors[:, c]), np.median(lumped[:, c])
+    print(f"{side} {joint} {coefficient}: per-leg median {100 * median:+.2f} %, lumped {100 * lumped_median:+.2f} %")
+    assert abs(median) < TARGET
 
 
 @pytest.mark.slow
