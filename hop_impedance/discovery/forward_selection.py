@@ -31,7 +31,9 @@ the next step's "current" runs, so every reported step's ``gap_after`` is below 
 Nuisances absorbed, never named: the per-stance touchdown moment ``M_td``
 (the strict baseline ``M = M_td + K phi``; estimated per stance as the mean
 ID-moment residual of that stance, also on the held-out stance: it is part
-of the measured touchdown state) and body-segment parameters that differ
+of the measured touchdown state), the push-off amplitude of each stance when the model has a push-off
+(a per-hop control input, :func:`hop_impedance.discovery.identify.per_stance_push_off`) and body-segment
+parameters that differ
 from the de Leva tables (the identification works on the measured ID moments
 of the analysis' own body model, nothing is fitted to segment masses).
 """
