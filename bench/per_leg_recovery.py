@@ -26,6 +26,7 @@ seed only. The test (test/bilateral/test_per_leg_recovery.py) pools seeds
     .venv/bin/python bench/per_leg_recovery.py --seeds $(seq 11 30) --first-once
     .venv/bin/python bench/per_leg_recovery.py --seeds 11 12 13 14 --left 2.20 --right 1.53 --measured
 
+``--edge S`` leaves S seconds at each stance edge out of both analyses' fits.
 ``--pass-through HZ`` replaces the per-leg analysis' marker filter on the
 rebuilt rigid markers (:data:`hop_impedance.biomech.per_leg.PASS_THROUGH_HZ`).
 At the end, for the first seed, per leg and stance the hip moment against the
@@ -99,6 +100,7 @@ def main() -> None:
     parser.add_argument("--hops", type=int, default=4)
     parser.add_argument("--measured", action="store_true", help="per-leg kinematics from the markers as measured (rigid=False)")
     parser.add_argument("--first-once", action="store_true", help="compare each trial's first stance for the first seed only")
+    parser.add_argument("--edge", type=float, default=0.0, help="s left out of the fits at each stance edge (both analyses)")
     parser.add_argument("--pass-through", type=float, default=None, help="the per-leg marker filter on rigid markers (Hz)")
     args = parser.parse_args()
     if args.pass_through is not None:
@@ -112,7 +114,8 @@ def main() -> None:
     unpaired = {(side, joint): 0 for side in ("left", "right") for joint in JOINTS}
     for k, seed in enumerate(args.seeds):
         legs, _, _, lumped = recover_legs({"left": args.left, "right": args.right}, seed, n_hops=args.hops, lumped=True,
-                                          rigid=not args.measured, skip_first=1 if args.first_once and k else 0)
+                                          rigid=not args.measured, skip_first=1 if args.first_once and k else 0,
+                                          edge_s=args.edge)
         for side in ("left", "right"):
             pooled["per-leg", side].extend(legs[side])
             pooled["lumped", side].extend(lumped[side])
@@ -123,7 +126,8 @@ def main() -> None:
                 else:
                     unpaired[side, joint] += 1
     print(f"seeds {args.seeds}, {'measured markers' if args.measured else 'rigid-segment fit'}"
-          f"{', first stance once' if args.first_once else ''}; medians (%) with 95 % bootstrap interval")
+          f"{', first stance once' if args.first_once else ''}, fit edges {1000 * args.edge:g} ms;"
+          " medians (%) with 95 % bootstrap interval")
     for (kind, side), result in pooled.items():
         freq = args.left if side == "left" else args.right
         for joint in JOINTS:

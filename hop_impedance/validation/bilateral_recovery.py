@@ -72,7 +72,7 @@ def bilateral_from_trials(left, right, seed: int, noisy: bool = False):
 
 def recover_legs(freq_hz: dict[str, float], seed: int, *, n_hops: dict[str, int] | int = 4, cutoff_hz: float = 40.0,
                  noisy: bool = False, lumped: bool = False, rigid: bool = True,
-                 skip_first: int = 0):
+                 skip_first: int = 0, edge_s: float = 0.0):
     """Simulate, build, analyse per leg and fit; per leg a :class:`RecoveryResult` against ``SHARE`` x its law.
 
     ``freq_hz`` maps ``"left"``/``"right"`` to the hop frequency whose seed
@@ -85,6 +85,7 @@ def recover_legs(freq_hz: dict[str, float], seed: int, *, n_hops: dict[str, int]
     ``skip_first``: simulated stances not compared at the start of each trial
     (:func:`~hop_impedance.validation.coefficient_recovery.compare_with_law`; the first lands from
     the same lead-in whatever the seed, so it is one hop however many seeds are pooled).
+    ``edge_s``: time left out of the fit's objective at each stance edge (``FitOptions.exclude_*``), both analyses.
     """
     from hop_impedance.biomech.analysis import AnalysisOptions
     from hop_impedance.biomech.per_leg import analyze_legs, fit_legs
@@ -94,7 +95,8 @@ def recover_legs(freq_hz: dict[str, float], seed: int, *, n_hops: dict[str, int]
     trials = {side: simulate_law_trial(f, seed, hops[side]) for side, f in freq_hz.items()}
     bilateral, truths, trial_recordings = bilateral_from_trials(trials["left"], trials["right"], seed, noisy)
     analyses = analyze_legs(bilateral, AnalysisOptions(marker_cutoff_hz=cutoff_hz, force_cutoff_hz=cutoff_hz), rigid)
-    options = replace(default_fit_options(analyses["left"].options), reduce=False, terms=LAW_TERMS)
+    options = replace(default_fit_options(analyses["left"].options), reduce=False, terms=LAW_TERMS,
+                      exclude_touchdown_s=edge_s, exclude_takeoff_s=edge_s)
     fits = fit_legs(analyses, options)
     results = {side: compare_with_law(analyses[side], fits[side], truths[side], law_scale=SHARE, skip_first=skip_first)
                for side in ("left", "right")}
