@@ -403,10 +403,10 @@ def extend_past_window(span: SpanData, stances: list[Stance], k: int, options: A
     recovery errors against batch; cells moved by more than 2 percentage
     points): at PAD = 5 / 10 / 20 / 50 / 70 ms 25 / 19 / 10 / 2 / 0 with the
     straight line through 2 frames; at 5 / 20 / 50 ms 24 / 14 / 3 with a
-    quadratic through 4 frames (``--marker-fit 2 4``; largest move clean
+    quadratic through 4 frames (bench/low_latency_windows.py --marker-fit 2 4; largest move clean
     7.8 / 6.7 / 0.2 pp, noisy 34.6 / 30.2 / 5.8 pp, against 43.4 / 6.3 / 0.4
     and 61.0 / 13.4 / 2.8 pp with the line). The force treatment alone is exact: with the
-    recorded markers after the window end (``0.005 --true-markers-s 0.3``)
+    recorded markers after the window end (bench/low_latency_windows.py 0.005 --true-markers-s 0.3)
     0 of 36 move (largest 0.1 pp clean, 1.9 pp noisy). The markers are the
     limit: around a take-off the segment angular accelerations change within
     a few marker frames (the plate force drops), the batch filters average
