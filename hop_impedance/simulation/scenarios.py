@@ -15,6 +15,8 @@ import numpy as np
 
 from hop_impedance.biomech.body_model import DE_LEVA, body_model_from_stature
 from hop_impedance.recording import Subject
+from hop_impedance.seed_tables import JOINTS as TABLE2_JOINTS
+from hop_impedance.seed_tables import TABLE2_EQ10
 from hop_impedance.simulation.dynamics import Chain, chain_from_body_model, contact_ahead_of_toe_marker
 from hop_impedance.simulation.ground import GroundLaw, surface
 from hop_impedance.simulation.hopping_trial import HoppingConfig, touchdown_posture, touchdown_state
@@ -33,10 +35,9 @@ SEED_SUBJECT = Subject("sim_seed_mean", 54.8, 1.63, "female")
 
 #: Seed Table 2, k0 and k1 (N m/rad) for ankle, knee, hip at 1.53, 1.87, 2.20 Hz.
 SEED_TABLE2: dict[float, dict[str, tuple[float, float, float]]] = {
-    1.53: {"k0": (178.5, 110.0, 95.3), "k1": (193.3, 169.3, 161.8)},
-    1.87: {"k0": (223.3, 158.8, 139.4), "k1": (560.8, 541.3, 526.9)},
-    2.20: {"k0": (301.4, 230.9, 175.4), "k1": (948.2, 884.8, 894.8)},
-}
+    f: {name: tuple(getattr(row[j], name) for j in TABLE2_JOINTS) for name in ("k0", "k1")}  # type: ignore[misc]
+    for f, row in TABLE2_EQ10.items()
+}  # the seed's Table 2 means, typed once in hop_impedance/seed_tables.py
 
 #: Default touchdown joint angles (rad): ankle (sole-shank, 90 deg neutral,
 #: plantarflexed below), knee and hip (pi + flexion).
