@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from moment_truth import analysed_and_true_moments
 
 from hop_impedance.biomech.body_model import body_model_from_stature
 from hop_impedance.biomech.joint_angles import joint_angles
@@ -78,7 +79,7 @@ def test_force_plate_sees_the_toe_tip_and_the_analysis_recovers_the_true_moments
     """The plate's centre of pressure lies at the tip, ahead of the toe marker; inverse dynamics from the
     recorded markers and wrench (which never assumes the force acts at the toe marker) recovers the
     simulator's true moments as closely as with the contact at the marker (test_sim_trials round trip)."""
-    analysis = pytest.importorskip("hop_impedance.biomech.analysis")
+    pytest.importorskip("hop_impedance.biomech.analysis")
     rec, truth = toe_tip_recording
     assert truth["config"]["contact_ahead_of_toe_marker_m"] == pytest.approx(toe_tip_ahead_m(), rel=1e-9)
     at_marker = np.searchsorted(rec.force.stamp_ns, rec.markers.stamp_ns)  # force stamps include marker stamps
@@ -92,15 +93,8 @@ def test_force_plate_sees_the_toe_tip_and_the_analysis_recovers_the_true_moments
     assert loaded.sum() > 40
     np.testing.assert_allclose(gap, toe_tip_ahead_m() * cos_pitch, atol=2e-3)
     assert cos_pitch.min() < 0.95  # the heel is up for part of the stance, so the test sees the pitch
-    result = analysis.analyze_recording(rec, analysis.AnalysisOptions(marker_cutoff_hz=20.0, force_cutoff_hz=20.0))
-    good = [s for s in result.stances if s.rejection_reason is None]
-    assert len(good) == len(truth["stances"])
-    for s, ts in zip(good, truth["stances"]):
-        tt = np.array(ts["samples"]["t_s"])
-        true = np.array(ts["samples"]["moments_nm"])
-        est = np.stack([np.interp(tt, s.touchdown_s + s.joints.time_s, s.joints.moment_nm[:, j],
-                                  left=np.nan, right=np.nan) for j in range(3)], 1)
-        n = len(tt)
+    for est, true in analysed_and_true_moments(rec, truth):
+        n = len(true)
         inner = np.isfinite(est).all(axis=1)
         inner[: int(0.1 * n)] = inner[int(0.9 * n):] = False
         rms = np.sqrt(np.mean((est[inner] - true[inner]) ** 2, axis=0)) / np.abs(true).max(axis=0)
