@@ -49,8 +49,10 @@ def run(args: argparse.Namespace) -> int:
             while rclpy.ok() and not node.finished.is_set():
                 rclpy.spin_once(node, timeout_sec=0.1)
         except (KeyboardInterrupt, ExternalShutdownException):
-            pass
-        interrupted = not node.finished.is_set()
+            interrupted = True
+        # SIGINT shuts the context down: the playback thread then ends and sets ``finished`` too, possibly
+        # before this line, so a finished node alone does not mean the replay ran to its end
+        interrupted = interrupted or not rclpy.ok() or not node.finished.is_set()
         node.stop()
         node.finished.wait(5.0)  # the playback thread ends before the context goes
         for topic, n in node.published.items():
