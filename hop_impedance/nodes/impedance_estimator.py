@@ -130,6 +130,7 @@ class ImpedanceEstimatorNode(Node):
         self.pools = {name: StancePool(pool_n) for name in JOINT_NAMES}
         self.valid_since_ns = [0, 0, 0]  # wall clock (ns) at which each valid value's take-off reached the pipeline
         self.subject_key: tuple | None = None
+        self.feed_mass_kg = math.nan  # body mass the latest stance was analysed for
         self.subject_since_ns = 0  # touchdowns before this stamp belong to the previous subject
         self.feed = _empty_feed(side, self.max_age_s, pool_n)
         self.pub_profile = self.create_publisher(ImpedanceProfile, PROFILE_TOPIC, result_qos())
@@ -175,6 +176,7 @@ class ImpedanceEstimatorNode(Node):
                   if touchdown_ns < self.subject_since_ns else None)
         subject_mass = self.subject_key[1] if self.subject_key is not None else None
         reasons = update_feed(self.feed, msg, stance, fits, self.bounds, self.pools, before, subject_mass)
+        self.feed_mass_kg = stance_mass_kg(msg)
         self.last_pooled = (key[:2], {name: fits[name] for name in JOINT_NAMES if reasons[name] is None})
         for j, name in enumerate(JOINT_NAMES):
             if reasons[name] is None:
@@ -203,7 +205,11 @@ class ImpedanceEstimatorNode(Node):
         key = (msg.subject_id, float(msg.body_mass), float(msg.body_height))
         if key == self.subject_key:
             return  # the same /subject again (a looped replay, a late transient-local copy)
-        changed = self.subject_key is not None or any(self.feed.valid)
+        # The first /subject heard is a change only if the latched valid values were analysed for another body
+        # mass: in separate processes /subject can reach this node after the first stance (discovery order),
+        # and that stance was analysed for this very subject by inverse_dynamics.
+        changed = self.subject_key is not None or (any(self.feed.valid) and not (
+            abs(self.feed_mass_kg - msg.body_mass) <= MASS_TOLERANCE * msg.body_mass))
         old = self.feed.subject_id
         self.subject_key = key
         self.feed.subject_id = msg.subject_id
@@ -357,6 +363,11 @@ def reset_feed(feed: ControllerImpedance, reason: str) -> None:
     feed.invalid_reason = [reason] * 3
 
 
+def stance_mass_kg(stance: StanceKinetics) -> float:
+    """Body mass inverse_dynamics analysed the stance for: ``peak_grf_n / (peak_grf_bw g)`` (NaN if unknown)."""
+    return stance.peak_grf_n / (stance.peak_grf_bw * GRAVITY_M_S2) if stance.peak_grf_bw > 0 else math.nan
+
+
 def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result, fits: dict[str, JointImpedanceFit],
                 bounds: PlausibilityBounds | None = None, pools: dict[str, StancePool] | None = None,
                 reason: str | None = None, subject_mass_kg: float | None = None) -> dict[str, str | None]:
@@ -391,7 +402,7 @@ def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result
     invalid = list(feed.invalid_reason)
     stance_reason = stance.rejection_reason or reason
     reasons: dict[str, str | None] = {}
-    mass = stance.peak_grf_n / (stance.peak_grf_bw * GRAVITY_M_S2) if stance.peak_grf_bw > 0 else math.nan
+    mass = stance_mass_kg(stance)
     hop_f = stance.hop_frequency_hz if math.isfinite(stance.hop_frequency_hz) else None
     for j, name in enumerate(JOINT_NAMES):
         fit = fits[name]

@@ -203,3 +203,52 @@ def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
         assert not any(any(f.valid) for _, f in feeds[n:])
     finally:
         rclpy.shutdown(context=context)
+
+
+@pytest.mark.parametrize("mass_offset_kg", [0.0, 10.0])
+def test_first_subject_after_the_first_stance(stances, mass_offset_kg):
+    """In separate processes ``/subject`` may reach the estimator after the first stance (discovery order; a
+    fresh-clone CI run once saw an extra, invalid feed message this way). The first ``/subject`` heard leaves the
+    latched values valid when they were analysed for its body mass, and invalidates them when not."""
+    from hop_impedance.nodes.impedance_estimator import ImpedanceEstimatorNode
+
+    subject, msgs = stances
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        estimator = ImpedanceEstimatorNode(context=context, parameter_overrides=[
+            Parameter("max_age_s", value=0.0), Parameter("diagnostics_period_s", value=0.0)])
+        tester = rclpy.create_node("first_subject_tester", context=context)
+        feeds: list[ControllerImpedance] = []
+        tester.create_subscription(ControllerImpedance, CONTROLLER_TOPIC, feeds.append, history_qos(200))
+        pub_stance = tester.create_publisher(StanceKinetics, STANCE_KINETICS_TOPIC, history_qos())
+        pub_subject = tester.create_publisher(SubjectInfo, SUBJECT_TOPIC, latched_qos())
+        executor = rclpy.executors.SingleThreadedExecutor(context=context)
+        executor.add_node(estimator)
+        executor.add_node(tester)
+
+        def spin_for(seconds, predicate=lambda: False):
+            deadline = time.monotonic() + seconds
+            while time.monotonic() < deadline and not predicate():
+                executor.spin_once(timeout_sec=0.02)
+
+        spin_for(30.0, lambda: len(feeds) >= 1)  # the start message
+        msg = msgs[0]
+        msg.takeoff_received_ns = time.time_ns()
+        pub_stance.publish(msg)
+        spin_for(30.0, lambda: any(stamp_ns(f.takeoff_stamp) for f in feeds))
+        first = [f for f in feeds if stamp_ns(f.takeoff_stamp)]
+        assert len(first) == 1 and any(first[0].valid) and first[0].subject_id == ""
+        n = len(feeds)
+        pub_subject.publish(_subject(subject.subject_id, subject.body_mass_kg + mass_offset_kg, subject.body_height_m))
+        spin_for(30.0, lambda: estimator.subject_key is not None)
+        spin_for(1.0)  # anything the subject caused has arrived by now
+        assert estimator.feed.subject_id == subject.subject_id
+        if mass_offset_kg == 0.0:
+            # the same body mass the stance was analysed for: nothing to withdraw, nothing republished
+            assert feeds[n:] == [] and list(estimator.feed.valid) == list(first[0].valid)
+        else:
+            assert len(feeds[n:]) == 1 and not any(feeds[n].valid)
+            assert feeds[n].invalid_reason == [f"subject changed from '' to {subject.subject_id!r}"] * 3
+    finally:
+        rclpy.shutdown(context=context)
