@@ -398,34 +398,23 @@ def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result
     feed.stance_index = stance.stance_index
     feed.touchdown_stamp, feed.takeoff_stamp = stance.touchdown_stamp, stance.takeoff_stamp
     arrays = {n: list(getattr(feed, n)) for n in VALUE_FIELDS}
-    valid = list(feed.valid)
-    invalid = list(feed.invalid_reason)
     stance_reason = stance.rejection_reason or reason
     reasons: dict[str, str | None] = {}
     mass = stance_mass_kg(stance)
     hop_f = stance.hop_frequency_hz if math.isfinite(stance.hop_frequency_hz) else None
     for j, name in enumerate(JOINT_NAMES):
         fit = fits[name]
-        reason = stance_reason or None
-        values = None
-        if reason is None and stance_result.joints is not None:
-            data = stance_result.joints.joint(name)
-            k_eq, b_eq, theta_eq = equivalent_linear_impedance(data["angle_rad"], data["angular_velocity_rad_s"], data["moment_nm"])
-            reason = controller_rejection(name, fit, k_eq, b_eq, hop_f, mass, bounds)
-            values = {"k0_nm_per_rad": _c(fit, "k0"), "k1_nm_per_rad2": _c(fit, "k1"), "b0_nms_per_rad": _c(fit, "b0"),
-                      "rho0_rad": float(fit.rho0), "omega0_rad_s": float(fit.omega0), "tau0_nm": _c(fit, "m0"),
-                      "stiffness_eq_nm_per_rad": k_eq, "damping_eq_nms_per_rad": controller_damping(b_eq),
-                      "equilibrium_angle_rad": theta_eq,
-                      **{f"{t}_std_error": _f(fit.std_errors.get(t)) for t in ("k0", "k1", "b0")}}
-            if reason is None and subject_mass_kg and not abs(mass - subject_mass_kg) <= MASS_TOLERANCE * subject_mass_kg:
-                reason = (f"stance analysed for body mass {mass:.1f} kg, /subject {feed.subject_id!r} "
-                          f"has {subject_mass_kg:.1f} kg")
-        elif reason is None:
-            reason = fit.rejection_reason or "no joint data"
-        reasons[name] = reason
-        valid[j] = reason is None
-        invalid[j] = reason or ""
-        if reason is None:
+        if stance_reason:
+            joint_reason, values = stance_reason, None
+        elif stance_result.joints is None:
+            joint_reason, values = fit.rejection_reason or "no joint data", None
+        else:
+            joint_reason, values = _joint_entry(name, fit, stance_result.joints.joint(name), hop_f, mass, bounds)
+            if joint_reason is None and subject_mass_kg and not abs(mass - subject_mass_kg) <= MASS_TOLERANCE * subject_mass_kg:
+                joint_reason = (f"stance analysed for body mass {mass:.1f} kg, /subject {feed.subject_id!r} "
+                                f"has {subject_mass_kg:.1f} kg")
+        reasons[name] = joint_reason
+        if joint_reason is None and values is not None:
             for key, v in values.items():
                 arrays[key][j] = v
             if pools is not None:
@@ -433,13 +422,31 @@ def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result
     for key, v in arrays.items():
         setattr(feed, key, v)
     if pools is not None:
-        estimates = {name: {t: pools[name].estimate(t) for t in ("k0", "k1", "b0")} for name in JOINT_NAMES}
-        for field, (term, attr) in POOLED_FIELDS.items():
-            setattr(feed, field, [float(getattr(estimates[n][term], attr)) for n in JOINT_NAMES])
-        feed.pooled_n_stances = [len(pools[n]) for n in JOINT_NAMES]
-    feed.valid = valid
-    feed.invalid_reason = invalid
+        _set_pooled(feed, pools)
+    feed.valid = [reasons[n] is None for n in JOINT_NAMES]
+    feed.invalid_reason = [reasons[n] or "" for n in JOINT_NAMES]
     return reasons
+
+
+def _joint_entry(name: str, fit: JointImpedanceFit, data: dict, hop_f: float | None, mass_kg: float,
+                 bounds: PlausibilityBounds | None) -> tuple[str | None, dict[str, float]]:
+    """One joint of a stance with joint data: why it is not plausible (None = plausible) and its feed values."""
+    k_eq, b_eq, theta_eq = equivalent_linear_impedance(data["angle_rad"], data["angular_velocity_rad_s"], data["moment_nm"])
+    reason = controller_rejection(name, fit, k_eq, b_eq, hop_f, mass_kg, bounds)
+    values = {"k0_nm_per_rad": _c(fit, "k0"), "k1_nm_per_rad2": _c(fit, "k1"), "b0_nms_per_rad": _c(fit, "b0"),
+              "rho0_rad": float(fit.rho0), "omega0_rad_s": float(fit.omega0), "tau0_nm": _c(fit, "m0"),
+              "stiffness_eq_nm_per_rad": k_eq, "damping_eq_nms_per_rad": controller_damping(b_eq),
+              "equilibrium_angle_rad": theta_eq,
+              **{f"{t}_std_error": _f(fit.std_errors.get(t)) for t in ("k0", "k1", "b0")}}
+    return reason, values
+
+
+def _set_pooled(feed: ControllerImpedance, pools: dict[str, StancePool]) -> None:
+    """The pooled k0, k1, b0 of every joint, their standard errors, chi^2/dof and stance counts."""
+    estimates = {name: {t: pools[name].estimate(t) for t in ("k0", "k1", "b0")} for name in JOINT_NAMES}
+    for field, (term, attr) in POOLED_FIELDS.items():
+        setattr(feed, field, [float(getattr(estimates[n][term], attr)) for n in JOINT_NAMES])
+    feed.pooled_n_stances = [len(pools[n]) for n in JOINT_NAMES]
 
 
 def main(args=None) -> None:
