@@ -81,6 +81,15 @@ def joint_angles(q: np.ndarray, alpha_rad: float) -> np.ndarray:
     )
 
 
+def joint_rates(qd: np.ndarray) -> np.ndarray:
+    """Joint angular rates (rad/s), shape (N, 3), ankle, knee, hip: :func:`joint_angles` differentiated.
+
+    ``qd`` are the segment rates q1..q4 (rad/s), shape (N, 4); alpha and pi
+    are constant, so each rate is a difference of two segment rates.
+    """
+    return np.stack([qd[:, 0] - qd[:, 1], qd[:, 2] - qd[:, 1], qd[:, 2] - qd[:, 3]], axis=1)
+
+
 def segment_angles_from_joint_angles(rho: np.ndarray, q_foot: np.ndarray, alpha_rad: float) -> np.ndarray:
     """Inverse of :func:`joint_angles` given the foot angle (rad), shape (N, 4)."""
     rho = np.atleast_2d(np.asarray(rho, float))

@@ -31,7 +31,7 @@ from scipy.sparse import csr_matrix
 
 from hop_impedance.biomech.body_model import BodyModel, body_model, foot_geometry_from_points, with_overrides
 from hop_impedance.biomech.filtering import DEFAULT_CUTOFF_HZ, DEFAULT_MAX_GAP_S, Gap, fill_gaps, lowpass, sampling_rate_hz
-from hop_impedance.biomech.joint_angles import joint_angles, segment_angle
+from hop_impedance.biomech.joint_angles import joint_angles, joint_rates, segment_angle
 from hop_impedance.recording import MARKER_NAMES, MarkerSeries, Subject
 
 #: Joint points used by the dynamics, in order: contact point and the proximal end of each segment.
@@ -214,6 +214,41 @@ def compute_kinematics(
     list of Gap
         Gaps found (column = marker index in :data:`MARKER_NAMES`).
     """
+    smooth, reliable_m, gaps = _filled_filtered_markers(marker_t_s, markers_xz, cutoff_hz, max_gap_s)
+    points = smooth[:, _POINT_IDX, :]
+    q = segment_angles_from_points(points)
+    com = segment_coms(points, q, model)
+    t_out = np.asarray(t_out_s, float)
+    inside = (t_out >= marker_t_s[0]) & (t_out <= marker_t_s[-1])
+    value, rate, accel = _splined_signals(marker_t_s, points, q, com, t_out[inside])
+    qv = _on_output(value[:, _Q_COLUMNS], (4,), inside)
+    qd = _on_output(rate, (4,), inside)
+    kin = Kinematics(
+        t_s=t_out,
+        points_xz=_on_output(value[:, _POINT_COLUMNS], (5, 2), inside),
+        q=qv,
+        qd=qd,
+        qdd=_on_output(accel[:, :4], (4,), inside),
+        rho=joint_angles(qv, model.foot_geometry.alpha_rad),
+        rhod=joint_rates(qd),
+        com_xz=_on_output(value[:, _COM_COLUMNS], (4, 2), inside),
+        com_acc=_on_output(accel[:, 4:], (4, 2), inside),
+        reliable=_reliable_on_output(marker_t_s, reliable_m, t_out, inside),
+    )
+    return kin, gaps
+
+
+def _filled_filtered_markers(
+    marker_t_s: np.ndarray, markers_xz: np.ndarray, cutoff_hz: float, max_gap_s: float
+) -> tuple[np.ndarray, np.ndarray, list[Gap]]:
+    """Steps 2 and 3 of the module docstring: gaps filled, then the zero-lag low-pass at the marker rate.
+
+    Returns the filtered markers (m), shape (M, 6, 2), the per-frame
+    reliability of each marker from
+    :func:`~hop_impedance.biomech.filtering.fill_gaps`, shape (M, 6), and the
+    gaps found. Raises ValueError for fewer than 8 frames or a marker that is
+    never visible.
+    """
     if len(marker_t_s) < 8:
         raise ValueError(f"need at least 8 marker frames, got {len(marker_t_s)}")
     filled, reliable_m, gaps = fill_gaps(marker_t_s, markers_xz, max_gap_s)
@@ -221,45 +256,49 @@ def compute_kinematics(
         bad = [MARKER_NAMES[c] for c in range(filled.shape[1]) if not np.isfinite(filled[:, c]).all()]
         raise ValueError(f"marker(s) {bad} never visible: cannot compute kinematics")
     fs = sampling_rate_hz(marker_t_s)
-    smooth = lowpass(filled, fs, cutoff_hz)
-    points = smooth[:, _POINT_IDX, :]
-    q = segment_angles_from_points(points)
-    com = segment_coms(points, q, model)
-    t_out = np.asarray(t_out_s, float)
-    inside = (t_out >= marker_t_s[0]) & (t_out <= marker_t_s[-1])
-    tin = t_out[inside]
-    # One spline through every signal: points (10 columns), q (4), COM (8).
+    return lowpass(filled, fs, cutoff_hz), reliable_m, gaps
+
+
+#: Columns of the one spline through every signal (:func:`_splined_signals`): points, q, segment COMs.
+_POINT_COLUMNS, _Q_COLUMNS, _COM_COLUMNS = slice(0, 10), slice(10, 14), slice(14, 22)
+
+
+def _splined_signals(
+    marker_t_s: np.ndarray, points: np.ndarray, q: np.ndarray, com: np.ndarray, t_in: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Step 5 of the module docstring: one cubic spline through every signal, evaluated at ``t_in``.
+
+    ``t_in`` are the output times inside the marker span. Columns as in
+    ``_POINT_COLUMNS``, ``_Q_COLUMNS``, ``_COM_COLUMNS``: points (10), q (4),
+    COM (8). Only what the dynamics need is evaluated: all values (22
+    columns); rates of q (4); accelerations of q and the COMs (12, q first).
+    """
     n_m = len(marker_t_s)
     stacked = np.concatenate([points.reshape(n_m, -1), q, com.reshape(n_m, -1)], axis=1)
     spline = CubicSpline(marker_t_s, stacked, axis=0)
-    # Needed: all values; rates of q; accelerations of q and the COMs.
-    value, rate, accel = _evaluate_spline(spline, tin, (slice(None), slice(10, 14), slice(10, 22)))
+    return _evaluate_spline(spline, t_in, (slice(None), _Q_COLUMNS, slice(10, 22)))
 
-    def on_out(values: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-        if tin.size == t_out.size:
-            return np.ascontiguousarray(values).reshape((-1,) + shape)
-        full = np.full((t_out.size,) + shape, np.nan)
-        full[inside] = values.reshape((-1,) + shape)
-        return full
 
-    qv, qd, qdd = on_out(value[:, 10:14], (4,)), on_out(rate, (4,)), on_out(accel[:, :4], (4,))
-    alpha = model.foot_geometry.alpha_rad
-    rho = joint_angles(qv, alpha)
-    rhod = np.stack([qd[:, 0] - qd[:, 1], qd[:, 2] - qd[:, 1], qd[:, 2] - qd[:, 3]], axis=1)
-    # A frame is reliable if the nearest marker frames on both sides were.
+def _on_output(values: np.ndarray, shape: tuple[int, ...], inside: np.ndarray) -> np.ndarray:
+    """``values`` (one row per output time inside the marker span) on every output time, NaN outside.
+
+    ``inside`` (bool, one per output time) marks the output times in the
+    marker span; each row is reshaped to ``shape``.
+    """
+    if len(values) == inside.size:
+        return np.ascontiguousarray(values).reshape((-1,) + shape)
+    full = np.full((inside.size,) + shape, np.nan)
+    full[inside] = values.reshape((-1,) + shape)
+    return full
+
+
+def _reliable_on_output(marker_t_s: np.ndarray, reliable_m: np.ndarray, t_out: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """Reliability on the output times: a frame is reliable if the nearest marker frames on both sides were.
+
+    A marker frame is reliable when every marker is (``reliable_m``, shape
+    (M, 6)); output times outside the marker span are not reliable.
+    """
     ok_m = np.all(reliable_m, axis=1).astype(float)
     reliable = np.zeros(t_out.size, bool)
-    reliable[inside] = np.interp(tin, marker_t_s, ok_m) >= 1.0
-    kin = Kinematics(
-        t_s=t_out,
-        points_xz=on_out(value[:, :10], (5, 2)),
-        q=qv,
-        qd=qd,
-        qdd=qdd,
-        rho=rho,
-        rhod=rhod,
-        com_xz=on_out(value[:, 14:], (4, 2)),
-        com_acc=on_out(accel[:, 4:], (4, 2)),
-        reliable=reliable,
-    )
-    return kin, gaps
+    reliable[inside] = np.interp(t_out[inside], marker_t_s, ok_m) >= 1.0
+    return reliable
