@@ -423,16 +423,42 @@ def extend_past_window(span: SpanData, stances: list[Stance], k: int, options: A
     t, w = span.force_t_s, span.wrench
     dt = 1.0 / sampling_rate_hz(t)
     t_ext = t[-1] + dt * np.arange(1, int(np.ceil(TAIL_S / dt)) + 1)
-    before = [(s.touchdown_s, s.takeoff_s) for s in stances[: k + 1]]
-    flights = [f for f in flight_intervals(before, float(t[0]), float(t[-1])) if f[1] <= stances[k].touchdown_s]
-    _, offsets = flight_offsets(t, w, flights, options.flight_margin_s)
-    baseline = offsets[-1] if len(offsets) else np.zeros(w.shape[1])
+    baseline = _offset_of_flight_before(span, stances, k, options)
     out = SpanData(np.concatenate([t, t_ext]), np.vstack([w, np.tile(baseline, (t_ext.size, 1))]))
     if span.marker_t_s is None or len(span.marker_t_s) < 2:
         return out
     tm, xz = span.marker_t_s, span.markers_xz
+    tm_ext, xz_ext = _extrapolated_markers(tm, xz, t_ext[-1])
+    out.marker_t_s, out.markers_xz = np.concatenate([tm, tm_ext]), np.concatenate([xz, xz_ext])
+    return out
+
+
+def _offset_of_flight_before(span: SpanData, stances: list[Stance], k: int, options: AnalysisOptions) -> np.ndarray:
+    """Raw plate wrench of the flight before stance ``k`` in ``span`` (its mean, :func:`force_plate.flight_offsets`).
+
+    Only the stances up to ``k`` bound the flights (a later one is not known
+    live). No flight before the stance in the window: zeros, what the
+    zeroing assumes without flights.
+    """
+    t, w = span.force_t_s, span.wrench
+    before = [(s.touchdown_s, s.takeoff_s) for s in stances[: k + 1]]
+    flights = [f for f in flight_intervals(before, float(t[0]), float(t[-1])) if f[1] <= stances[k].touchdown_s]
+    _, offsets = flight_offsets(t, w, flights, options.flight_margin_s)
+    return offsets[-1] if len(offsets) else np.zeros(w.shape[1])
+
+
+def _extrapolated_markers(tm: np.ndarray, xz: np.ndarray, end_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Marker frames after the last one, at the marker rate, until one frame past ``end_s`` (s).
+
+    Each marker goes on by the least-squares polynomial of degree
+    ``MARKER_FIT_DEGREE`` in time through its last ``MARKER_FIT_FRAMES``
+    frames (fewer, and a lower degree, when its last visible run is
+    shorter); a marker whose last frame is missing stays NaN (its gap runs
+    to the edge). Returns the new times (s) and markers (m), shaped like
+    ``tm`` and ``xz``.
+    """
     dtm = 1.0 / sampling_rate_hz(tm)
-    tm_ext = tm[-1] + dtm * np.arange(1, int(np.ceil((t_ext[-1] - tm[-1]) / dtm)) + 2)
+    tm_ext = tm[-1] + dtm * np.arange(1, int(np.ceil((end_s - tm[-1]) / dtm)) + 2)
     xz_ext = np.full((tm_ext.size,) + xz.shape[1:], np.nan)
     for m in range(xz.shape[1]):
         finite = np.all(np.isfinite(xz[:, m]), axis=1)
@@ -443,8 +469,7 @@ def extend_past_window(span: SpanData, stances: list[Stance], k: int, options: A
         deg = min(MARKER_FIT_DEGREE, last.size - 1)
         coef = np.polynomial.polynomial.polyfit(tm[last] - tm[-1], xz[last, m], deg)
         xz_ext[:, m] = np.polynomial.polynomial.polyval(tm_ext - tm[-1], coef).T
-    out.marker_t_s, out.markers_xz = np.concatenate([tm, tm_ext]), np.concatenate([xz, xz_ext])
-    return out
+    return tm_ext, xz_ext
 
 
 def analyze_short_window(
