@@ -153,24 +153,20 @@ def case_run(source: str, name: str, seed: int, hops: int, sizes: EffectSizes, f
              workers: int | None = None) -> dict:
     """Generate one recording of a case (simulator or second generator), discover, return its tally."""
     tally = new_tally()
-    if source == "simulator":
-        expected = CASES[name][3]
-        try:
-            rec, freq = generate(name, seed, hops, sizes, freqs)
-        except ValueError as exc:
-            tally["gen_fail"] += 1
-            print(f"{name} seed {seed}: generation failed: {exc}", flush=True)
-            return tally
-        run_one(rec, f"{name:28s} seed {seed} f={freq}", expected, tally, workers)
-        return tally
-    expected = set(STRICT_CASES[name].effects)
     try:
-        rec, _ = strict_recording(replace(STRICT_CASES[name], seed=seed, hops=hops))
+        if source == "simulator":
+            expected = CASES[name][3]
+            rec, freq = generate(name, seed, hops, sizes, freqs)
+            label = f"{name:28s} seed {seed} f={freq}"
+        else:
+            expected = set(STRICT_CASES[name].effects)
+            rec, _ = strict_recording(replace(STRICT_CASES[name], seed=seed, hops=hops))
+            label = f"strict {name:21s} seed {seed}"
     except ValueError as exc:
         tally["gen_fail"] += 1
-        print(f"strict {name} seed {seed}: generation failed: {exc}", flush=True)
+        print(f"{'' if source == 'simulator' else 'strict '}{name} seed {seed}: generation failed: {exc}", flush=True)
         return tally
-    run_one(rec, f"strict {name:21s} seed {seed}", expected, tally, workers)
+    run_one(rec, label, expected, tally, workers)
     return tally
 
 
