@@ -418,17 +418,24 @@ class NominalPeriod:
 
     def __init__(self) -> None:
         self._steps: list[float] = []
-        self._last_t: float | None = None
+        self._last_t: float | np.integer | None = None
         #: The nominal period (s), or None until enough steps were seen.
         self.value: float | None = None
 
     def update(self, t_s: np.ndarray) -> None:
-        """Take the steps of a chunk of increasing times ``t_s`` (s) until the period is known."""
+        """Take the steps of a chunk of increasing times ``t_s`` (s) until the period is known.
+
+        Any unit works: integer nanosecond stamps stay integers (the node's
+        reorder buffer, :class:`hop_impedance.nodes.common.ReorderBuffer`, passes
+        them; a float64 of an epoch stamp in ns would lose ~100 ns).
+        """
         if self.value is not None or len(t_s) == 0:
             return
-        t = np.asarray(t_s, float) if self._last_t is None else np.concatenate([[self._last_t], t_s])
+        t = np.asarray(t_s) if self._last_t is None else np.concatenate([[self._last_t], t_s])
+        if t.dtype.kind not in "iu":
+            t = t.astype(float)
         self._steps.extend(float(v) for v in np.diff(t) if v > 0)
-        self._last_t = float(t[-1])
+        self._last_t = t[-1]
         if len(self._steps) >= NOMINAL_PERIOD_STEPS:
             self.value = float(np.median(self._steps[:NOMINAL_PERIOD_STEPS]))
             self._steps = []

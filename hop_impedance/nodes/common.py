@@ -28,6 +28,7 @@ import numpy as np
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
 
+from hop_impedance.biomech.stages import NominalPeriod
 from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
 
 EVENTS_TOPIC = "/stance/events"
@@ -200,16 +201,14 @@ class ReorderBuffer:
     take-off by 20 ms). Only behind a hole (a sample late or lost) do the
     items wait, until the hole is filled or ``window_ns`` of newer stamps have
     arrived. The nominal period is the median of the first
-    :data:`NOMINAL_STEPS` steps released through the window (before that,
-    every item waits for the window).
+    :data:`~hop_impedance.biomech.stages.NOMINAL_PERIOD_STEPS` steps released through the window (before that,
+    every item waits for the window), learnt by the stages' own
+    :class:`~hop_impedance.biomech.stages.NominalPeriod` on the stamps in ns.
 
     ``add`` returns False (and counts ``dropped``) for an item older than (or
     as old as) the last released one: it arrived too late to be used in order,
     or is a duplicate of a released one.
     """
-
-    #: Released steps that set the nominal period.
-    NOMINAL_STEPS = 50
 
     def __init__(self, window_ns: int) -> None:
         self.window_ns = int(window_ns)
@@ -218,7 +217,7 @@ class ReorderBuffer:
         self.dropped = 0
         self.duplicates = 0
         self.period_ns: int | None = None
-        self._steps: list[int] = []
+        self._period = NominalPeriod()
 
     def add(self, ns: int, item) -> bool:
         if self.released_ns is not None and ns <= self.released_ns:
@@ -244,7 +243,8 @@ class ReorderBuffer:
         while n < len(self.items) and self.items[n][0] <= limit:
             n += 1
         if self.period_ns is None:
-            self._learn_period(([self.released_ns] if self.released_ns is not None else []) + [x[0] for x in self.items[:n]])
+            self._period.update(np.array([x[0] for x in self.items[:n]], dtype=np.int64))
+            self.period_ns = None if self._period.value is None else int(self._period.value)
         if self.period_ns is not None:
             last = self.items[n - 1][0] if n else self.released_ns
             max_step = self.period_ns * 3 // 2
@@ -258,12 +258,6 @@ class ReorderBuffer:
             out = unique
             self.released_ns = out[-1][0]
         return out
-
-    def _learn_period(self, stamps: list[int]) -> None:
-        self._steps += [b - a for a, b in zip(stamps, stamps[1:]) if b > a]
-        if len(self._steps) >= self.NOMINAL_STEPS:
-            self.period_ns = int(np.median(self._steps[: self.NOMINAL_STEPS]))
-            self._steps = []
 
 
 class InputGuard:
