@@ -18,6 +18,7 @@ All warnings are collected in ``Recording.warnings`` (one line each).
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -85,51 +86,78 @@ def load_recording(path: str | Path, marker_map: dict[str, str] | None = None, r
         implausible units.
     """
     stream = MessageStream(path, topics=[FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC])
-    f_stamp: list[int] = []
-    f_vals: list[tuple[float, ...]] = []
-    m_stamp: list[int] = []
-    m_pos: list[np.ndarray] = []
-    subject: Subject | None = None
-    marker_cols: list[int] | None = None
     checks = InputChecks(marker_map=marker_map)
-    warnings: list[str] = []
-    n_bad_marker_frames = 0
+    read = _read_contract_messages(stream, checks)
+    warnings = _reading_warnings(stream, read)
+    if not read.force_stamp_ns:
+        raise RecordingError(f"{stream.path}: no {FORCE_TOPIC} messages (is this a hopping recording of contract v1?)")
+    force = _force_series(np.array(read.force_stamp_ns, dtype=np.int64), np.array(read.force_values, dtype=float), warnings)
+    markers = None
+    if read.marker_stamp_ns:
+        markers = _marker_series(np.array(read.marker_stamp_ns, dtype=np.int64), np.stack(read.marker_positions_m), warnings)
+    elif require_markers:
+        raise RecordingError(f"{stream.path}: no {MARKER_TOPIC} messages; joint angles and moments need markers")
+    if read.subject is None:
+        warnings.append(f"{SUBJECT_TOPIC}: missing; body mass and height must be given (e.g. --mass-kg, --height-m)")
+    else:
+        checks.set_subject(read.subject)
+    check_recording(checks, force, markers)
+    return Recording(force=force, markers=markers, subject=read.subject, source=str(stream.path), warnings=warnings)
+
+
+@dataclass
+class _ContractMessages:
+    """The contract topics of one file as read, in arrival order (sorted later by stamp)."""
+
+    force_stamp_ns: list[int] = field(default_factory=list)
+    #: (fx, fy, fz, tx, ty, tz) per wrench message (N, N m)
+    force_values: list[tuple[float, ...]] = field(default_factory=list)
+    marker_stamp_ns: list[int] = field(default_factory=list)
+    #: (6, 3) contract markers per frame (m), columns picked by the marker names
+    marker_positions_m: list[np.ndarray] = field(default_factory=list)
+    #: the first ``/subject`` message; later ones are ignored
+    subject: Subject | None = None
+    #: marker frames whose names and positions differ in length (skipped)
+    n_bad_marker_frames: int = 0
+
+
+def _read_contract_messages(stream: MessageStream, checks: InputChecks) -> _ContractMessages:
+    """Decode every wrench, marker and subject message of ``stream``.
+
+    The marker names of each frame go through ``checks`` (missing contract
+    markers raise :class:`~hop_impedance.input_checks.InputCheckError` at once).
+    """
+    read = _ContractMessages()
+    marker_cols: list[int] | None = None
     for msg in stream:
         m = msg.message
         if msg.topic == FORCE_TOPIC:
             f, t = m.wrench.force, m.wrench.torque
-            f_stamp.append(_stamp_ns(m.header))
-            f_vals.append((f.x, f.y, f.z, t.x, t.y, t.z))
+            read.force_stamp_ns.append(_stamp_ns(m.header))
+            read.force_values.append((f.x, f.y, f.z, t.x, t.y, t.z))
         elif msg.topic == MARKER_TOPIC:
             names = list(m.names)
             marker_cols = checks.marker_names(names)
             checks.raise_if_failed()
             if len(m.positions) != len(names):
-                n_bad_marker_frames += 1
+                read.n_bad_marker_frames += 1
                 continue
             xyz = np.array([(p.x, p.y, p.z) for p in m.positions], dtype=float)
-            m_stamp.append(_stamp_ns(m.header))
-            m_pos.append(xyz[marker_cols])
-        elif msg.topic == SUBJECT_TOPIC and subject is None:
-            subject = Subject(str(m.subject_id), float(m.body_mass), float(m.body_height))
+            read.marker_stamp_ns.append(_stamp_ns(m.header))
+            read.marker_positions_m.append(xyz[marker_cols])
+        elif msg.topic == SUBJECT_TOPIC and read.subject is None:
+            read.subject = Subject(str(m.subject_id), float(m.body_mass), float(m.body_height))
+    return read
+
+
+def _reading_warnings(stream: MessageStream, read: _ContractMessages) -> list[str]:
+    """What went wrong while reading: where a truncated file stopped, skipped malformed marker frames."""
+    warnings: list[str] = []
     if stream.stopped_at:
         warnings.append(f"{stream.path.name}: {stream.stopped_at}")
-    if n_bad_marker_frames:
-        warnings.append(f"{MARKER_TOPIC}: {n_bad_marker_frames} frame(s) with names/positions of different lengths skipped")
-    if not f_stamp:
-        raise RecordingError(f"{stream.path}: no {FORCE_TOPIC} messages (is this a hopping recording of contract v1?)")
-    force = _force_series(np.array(f_stamp, dtype=np.int64), np.array(f_vals, dtype=float), warnings)
-    markers = None
-    if m_stamp:
-        markers = _marker_series(np.array(m_stamp, dtype=np.int64), np.stack(m_pos), warnings)
-    elif require_markers:
-        raise RecordingError(f"{stream.path}: no {MARKER_TOPIC} messages; joint angles and moments need markers")
-    if subject is None:
-        warnings.append(f"{SUBJECT_TOPIC}: missing; body mass and height must be given (e.g. --mass-kg, --height-m)")
-    else:
-        checks.set_subject(subject)
-    check_recording(checks, force, markers)
-    return Recording(force=force, markers=markers, subject=subject, source=str(stream.path), warnings=warnings)
+    if read.n_bad_marker_frames:
+        warnings.append(f"{MARKER_TOPIC}: {read.n_bad_marker_frames} frame(s) with names/positions of different lengths skipped")
+    return warnings
 
 
 def _force_series(stamps: np.ndarray, vals: np.ndarray, warnings: list[str]) -> ForcePlateSeries:
