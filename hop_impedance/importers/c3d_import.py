@@ -162,34 +162,17 @@ def c3d_session(path: str | Path) -> LabSession:
         If ezc3d cannot read it, its force-plate parameters are unusable,
         a unit is unknown, or there is no force plate.
     """
-    import ezc3d
-
     path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"{path}: no such file")
+    c3d = _read_c3d(path)
     warnings: list[str] = []
-    try:
-        c3d = ezc3d.c3d(str(path), extract_forceplat_data=True)
-    except (RuntimeError, ValueError, IndexError, OSError) as exc:
-        try:
-            ezc3d.c3d(str(path))
-        except (RuntimeError, ValueError, IndexError, OSError) as exc2:
-            raise ValueError(f"{path}: ezc3d cannot read it: {exc2}") from None
-        raise ValueError(f"{path}: force-plate parameters (FORCE_PLATFORM group) are unusable: {exc}") from None
     params = c3d["parameters"]
     time_s, labels, positions = _markers(c3d, warnings)
     force_time_s, plates = _plates(c3d)
     if not plates:
         raise ValueError(f"{path}: no force plate found (FORCE_PLATFORM:USED is 0 or the group is missing)")
     if time_s is not None and plates:
-        ratio = c3d["header"]["analogs"]["frame_rate"] / c3d["header"]["points"]["frame_rate"]
-        if abs(ratio - round(ratio)) > 1e-6:
-            raise ValueError(f"{path}: inconsistent rates: analog rate / point rate = {ratio:g} is not an integer")
-    y_screen = _parameter(params, "POINT", "Y_SCREEN")
-    up_hint = str(y_screen[0]).strip().upper() if y_screen is not None else None
-    if up_hint is not None and up_hint.lstrip("+-") not in ("X", "Y", "Z"):
-        warnings.append(f"POINT:Y_SCREEN {up_hint!r} is not an axis: vertical detected from the markers")
-        up_hint = None
+        _check_rate_ratio(path, c3d)
+    up_hint = _up_hint(params, warnings)
     mass, height, subject_id = _subject_values(params, warnings)
     return LabSession(
         marker_time_s=time_s,
@@ -206,6 +189,39 @@ def c3d_session(path: str | Path) -> LabSession:
         warnings=warnings,
         parameters=_processing_parameters(params),
     )
+
+
+def _read_c3d(path: Path):
+    """The file read by ezc3d with its force plates extracted; a clear ValueError naming why not."""
+    import ezc3d
+
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    try:
+        return ezc3d.c3d(str(path), extract_forceplat_data=True)
+    except (RuntimeError, ValueError, IndexError, OSError) as exc:
+        try:
+            ezc3d.c3d(str(path))
+        except (RuntimeError, ValueError, IndexError, OSError) as exc2:
+            raise ValueError(f"{path}: ezc3d cannot read it: {exc2}") from None
+        raise ValueError(f"{path}: force-plate parameters (FORCE_PLATFORM group) are unusable: {exc}") from None
+
+
+def _check_rate_ratio(path: Path, c3d) -> None:
+    """Markers and plates share C3D frames: the analog rate must be an integer multiple of the point rate."""
+    ratio = c3d["header"]["analogs"]["frame_rate"] / c3d["header"]["points"]["frame_rate"]
+    if abs(ratio - round(ratio)) > 1e-6:
+        raise ValueError(f"{path}: inconsistent rates: analog rate / point rate = {ratio:g} is not an integer")
+
+
+def _up_hint(params, warnings: list[str]) -> str | None:
+    """The vertical stated by ``POINT:Y_SCREEN`` (``"+Z"``), or None (absent, or not an axis: warned)."""
+    y_screen = _parameter(params, "POINT", "Y_SCREEN")
+    up_hint = str(y_screen[0]).strip().upper() if y_screen is not None else None
+    if up_hint is not None and up_hint.lstrip("+-") not in ("X", "Y", "Z"):
+        warnings.append(f"POINT:Y_SCREEN {up_hint!r} is not an axis: vertical detected from the markers")
+        up_hint = None
+    return up_hint
 
 
 def import_c3d(path: str | Path, markers: str | Path | MarkerMapping | None = None, **options) -> Recording:
