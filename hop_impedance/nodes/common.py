@@ -75,7 +75,8 @@ def declare_stream_parameters(node: Node, work: str) -> tuple[bool, float, float
     parameter's description), e.g. ``"the detector"``.
     """
     return (
-        declare(node, "reliable_inputs", True, "match reliable publishers (replay, many mocap drivers); false = sensor-data best effort"),
+        declare(node, "reliable_inputs", True,
+                "match reliable publishers (replay, many mocap drivers); false = sensor-data best effort"),
         declare(node, "reorder_window_s", 0.02, "hold samples this long (stamp time, s) to sort out-of-order arrivals"),
         declare(node, "process_period_s", 0.005, f"run {work} on the buffered samples this often (s)"),
         declare(node, "diagnostics_period_s", 1.0, "publish /diagnostics this often (s); 0 = never"),
@@ -277,7 +278,8 @@ class InputGuard:
         from hop_impedance.recording import Subject
 
         self.node = node
-        wait = declare(node, "subject_wait_s", 2.0, f"wait this long (stamp time, s) for {SUBJECT_TOPIC} before using the parameters")
+        wait = declare(node, "subject_wait_s", 2.0,
+                       f"wait this long (stamp time, s) for {SUBJECT_TOPIC} before using the parameters")
         mass = declare(node, "body_mass_kg", 0.0, f"body mass (kg) if no {SUBJECT_TOPIC} arrives in time; 0 = stop with an error")
         height = declare(node, "body_height_m", 0.0, f"body height (m) if no {SUBJECT_TOPIC} arrives in time")
         fallback = Subject("parameters", float(mass), float(height)) if mass or height else None
@@ -381,8 +383,9 @@ class ProgressReporter:
     """
 
     def __init__(self, node: Node, trackers: dict[str, InputTracker], period_s: float = 0.01) -> None:
-        from hop_impedance.nodes.qos import result_qos
         from hop_impedance_msgs.msg import Progress
+
+        from hop_impedance.nodes.qos import result_qos
 
         self.node = node
         self.trackers = trackers
@@ -405,7 +408,6 @@ class ProgressReporter:
 
     def publish(self) -> None:
         from builtin_interfaces.msg import Time
-
         from hop_impedance_msgs.msg import Progress
 
         msg = Progress(node=self.node.get_fully_qualified_name(), finished=self.finished, stances_out=self.stances_out)

@@ -62,23 +62,29 @@ import math
 import time
 
 import numpy as np
+from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, StanceSummary, SubjectInfo
 from rclpy.node import Node
 
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.biomech.stages import WITHDRAWN, equivalent_linear_impedance
 from hop_impedance.impedance.plausibility import PlausibilityBounds, controller_damping, controller_rejection
 from hop_impedance.impedance.pooling import StancePool
-from hop_impedance.input_checks import INPUT_CHECK_PREFIX
 from hop_impedance.impedance.recording_fits import SEED_TERMS, StructureSelector, default_fit_options, fit_stance_joints
 from hop_impedance.impedance.stance_fit import JointImpedanceFit
+from hop_impedance.input_checks import INPUT_CHECK_PREFIX
 from hop_impedance.nodes.common import (
-    CONTROLLER_TOPIC, PROFILE_TOPIC, STANCE_KINETICS_TOPIC, SUMMARY_TOPIC, Diagnostics, declare, percentile_ms,
-    set_stamp, stamp_ns,
+    CONTROLLER_TOPIC,
+    PROFILE_TOPIC,
+    STANCE_KINETICS_TOPIC,
+    SUMMARY_TOPIC,
+    Diagnostics,
+    declare,
+    percentile_ms,
+    stamp_ns,
 )
 from hop_impedance.nodes.inverse_dynamics import stance_from_message
 from hop_impedance.nodes.qos import STANCE_HISTORY, history_qos, latched_qos, result_qos
 from hop_impedance.recording import GRAVITY_M_S2, SUBJECT_TOPIC
-from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, StanceSummary, SubjectInfo
 
 #: Default stated maximum age of a valid controller value (s); reasoning in docs/pipeline.md ("How old").
 MAX_AGE_S = 2.0
@@ -92,7 +98,8 @@ class ImpedanceEstimatorNode(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("impedance_estimator", **kwargs)
         diag = declare(self, "diagnostics_period_s", 1.0, "publish /diagnostics this often (s); 0 = never")
-        cutoff = declare(self, "cutoff_hz", 12.0, "low-pass cut-off the joint data were filtered with (Hz): the fit's noise bandwidth")
+        cutoff = declare(self, "cutoff_hz", 12.0,
+                         "low-pass cut-off the joint data were filtered with (Hz): the fit's noise bandwidth")
         from hop_impedance.biomech.analysis import AnalysisOptions
 
         self.options = default_fit_options(AnalysisOptions(marker_cutoff_hz=cutoff, force_cutoff_hz=cutoff))

@@ -55,6 +55,7 @@ import time
 
 import numpy as np
 from geometry_msgs.msg import WrenchStamped
+from hop_impedance_msgs.msg import JointKinetics, MarkerArray, StanceKinetics, SubjectInfo
 from rclpy.node import Node
 from std_msgs.msg import Header
 
@@ -63,13 +64,25 @@ from hop_impedance.biomech.analysis import AnalysisOptions, StanceResult
 from hop_impedance.biomech.per_leg import leg_subject
 from hop_impedance.biomech.stages import StanceAnalysisStage
 from hop_impedance.nodes.common import (
-    END_TOPIC, JOINT_KINETICS_TOPIC, STANCE_KINETICS_TOPIC, DeferredPublisher, Diagnostics, InputTracker, ProgressReporter,
-    InputGuard, ReorderBuffer, declare, declare_stream_parameters, seconds_to_ns, set_stamp, stamp_ns, wrench_from_cdr,
+    END_TOPIC,
+    JOINT_KINETICS_TOPIC,
+    STANCE_KINETICS_TOPIC,
+    DeferredPublisher,
+    Diagnostics,
+    InputGuard,
+    InputTracker,
+    ProgressReporter,
+    ReorderBuffer,
+    declare,
+    declare_stream_parameters,
+    seconds_to_ns,
+    set_stamp,
+    stamp_ns,
+    wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import history_qos, input_qos, latched_qos, result_qos
 from hop_impedance.nodes.stance_detector import declare_detector_options
 from hop_impedance.recording import FORCE_TOPIC, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, Subject
-from hop_impedance_msgs.msg import JointKinetics, MarkerArray, StanceKinetics, SubjectInfo
 
 
 class InverseDynamicsNode(Node):
@@ -255,7 +268,8 @@ class InverseDynamicsNode(Node):
             self.stage = StanceAnalysisStage(None, mass, self.options, self.post_pad_s)
         elif self.subject is not None:
             model_subject = self.subject if self.side == "lumped" else leg_subject(self.subject)  # one leg's segments
-            self.stage = StanceAnalysisStage(None, self.subject.body_mass_kg, self.options, self.post_pad_s, subject=model_subject)
+            self.stage = StanceAnalysisStage(None, self.subject.body_mass_kg, self.options, self.post_pad_s,
+                                             subject=model_subject)
 
     def _bound_pending(self, max_s: float = 30.0) -> None:
         """Without a subject, keep at most ``max_s`` of data (older samples are counted as lost)."""
@@ -384,7 +398,8 @@ def stance_from_message(msg: StanceKinetics) -> StanceResult:
     if n:
         res.joints = JointSeries(
             np.asarray(msg.time_s, float),
-            *(np.asarray(a, float).reshape(n, 3) for a in (msg.angle_rad, msg.angular_velocity_rad_s, msg.moment_nm, msg.power_w)),
+            *(np.asarray(a, float).reshape(n, 3)
+              for a in (msg.angle_rad, msg.angular_velocity_rad_s, msg.moment_nm, msg.power_w)),
         )
     return res
 

@@ -46,13 +46,13 @@ from __future__ import annotations
 import math
 
 from geometry_msgs.msg import Point
+from hop_impedance_msgs.msg import MarkerArray
 from rclpy.node import Node
 
 from hop_impedance.io.recording_io import LAB_FRAME_ID
 from hop_impedance.nodes.common import Diagnostics, InputTracker, declare, stamp_ns
 from hop_impedance.nodes.qos import input_qos
 from hop_impedance.recording import MARKER_NAMES, MARKER_TOPIC
-from hop_impedance_msgs.msg import MarkerArray
 from mocap4r2_msgs.msg import Marker, Markers
 
 
@@ -100,9 +100,12 @@ class Mocap4r2AdapterNode(Node):
         self.input_topic = declare(self, "input_topic", "/markers", "mocap4r2_msgs/msg/Markers topic of the driver")
         self.output_topic = declare(self, "output_topic", MARKER_TOPIC, "contract MarkerArray topic")
         names = declare(self, "marker_names", list(MARKER_NAMES), "contract marker of each entry")
-        labels = declare(self, "marker_labels", list(MARKER_NAMES), "lab label of each entry, used when the driver sets names ('' = none)")
-        indices = declare(self, "marker_indices", list(range(len(MARKER_NAMES))), "driver index of each entry, used otherwise (-1 = none)")
-        origin = list(declare(self, "origin_m", [0.0, 0.0, 0.0], "lab point subtracted from every position: the contract origin (m)"))
+        labels = declare(self, "marker_labels", list(MARKER_NAMES),
+                         "lab label of each entry, used when the driver sets names ('' = none)")
+        indices = declare(self, "marker_indices", list(range(len(MARKER_NAMES))),
+                          "driver index of each entry, used otherwise (-1 = none)")
+        origin = list(declare(self, "origin_m", [0.0, 0.0, 0.0],
+                              "lab point subtracted from every position: the contract origin (m)"))
         reliable = declare(self, "reliable_inputs", False, "true: reliable subscription; false (default) matches every driver")
         diag = declare(self, "diagnostics_period_s", 1.0, "publish /diagnostics this often (s); 0 = never")
         if len(origin) != 3:

@@ -51,7 +51,14 @@ from std_msgs.msg import Header
 from hop_impedance.biomech.plate_combining import PlateCombinerStage, PlateLayout
 from hop_impedance.io.recording_io import FORCE_FRAME_ID
 from hop_impedance.nodes.common import (
-    END_TOPIC, Diagnostics, InputTracker, ReorderBuffer, declare, declare_stream_parameters, set_stamp, stamp_ns,
+    END_TOPIC,
+    Diagnostics,
+    InputTracker,
+    ReorderBuffer,
+    declare,
+    declare_stream_parameters,
+    set_stamp,
+    stamp_ns,
     wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import input_qos, latched_qos
@@ -81,11 +88,14 @@ class PlateCombinerNode(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("plate_combiner", **kwargs)
         reliable, reorder_s, period, diag = declare_stream_parameters(self, "the combiner")
-        topics = list(declare(self, "plate_topics", ["/force_plate/left", "/force_plate/right"], "one WrenchStamped topic per plate; the first is the reference"))
+        topics = list(declare(self, "plate_topics", ["/force_plate/left", "/force_plate/right"],
+                              "one WrenchStamped topic per plate; the first is the reference"))
         names = list(declare(self, "plate_names", [""], "label per plate for diagnostics (default: topic's last part)"))
-        origins = list(declare(self, "plate_origins_m", [0.0] * 6, "x, y, z of each plate's origin in the lab frame, 3 per plate (m)"))
+        origins = list(declare(self, "plate_origins_m", [0.0] * 6,
+                               "x, y, z of each plate's origin in the lab frame, 3 per plate (m)"))
         yaws = list(declare(self, "plate_yaw_deg", [0.0, 0.0], "rotation of each plate's axes about the vertical (deg)"))
-        origin = list(declare(self, "origin_m", [0.0, 0.0, 0.0], "lab point the combined moment is about: the contract frame's origin (m)"))
+        origin = list(declare(self, "origin_m", [0.0, 0.0, 0.0],
+                              "lab point the combined moment is about: the contract frame's origin (m)"))
         max_skew = declare(self, "max_skew_s", 0.0006, "largest stamp skew between plates accepted when locking (s)")
         jitter = declare(self, "jitter_s", 0.0002, "per-sample stamp tolerance after the skew is locked (s)")
         wait = declare(self, "missing_after_s", 0.5, "drop an instant a plate lacks once the others run this far ahead (s)")

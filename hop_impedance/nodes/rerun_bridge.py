@@ -126,7 +126,8 @@ def joint_view_from_profile(msg) -> JointFitView:
 def stance_view_from_summary(msg, profiles: dict, start_ns: int) -> StanceView:
     """StanceSummary (+ its ImpedanceProfiles by joint) -> :class:`StanceView` on the bridge's time axis."""
     reason = msg.rejection_reason or None
-    joints = {j: (joint_view_from_profile(profiles[j]) if j in profiles and not reason else JointFitView(reason or "no profile")) for j in JOINT_NAMES}
+    joints = {j: (joint_view_from_profile(profiles[j]) if j in profiles and not reason else JointFitView(reason or "no profile"))
+              for j in JOINT_NAMES}
     freq = msg.hop_frequency_hz if math.isfinite(msg.hop_frequency_hz) and msg.hop_frequency_hz > 0 else None
     return StanceView(
         index=int(msg.stance_index),
@@ -216,7 +217,8 @@ class RerunBridge(Node):
             msgs, self._wrench[:] = list(self._wrench), []
             ns, force, torque = wrench_block(msgs)
             t0 = self._zero(ns.min())
-            log_ground_reaction(self.rec, (ns - t0) * 1e-9, force[:, [0, 2]], cop_x_from_wrench(force, torque), self.body_weight_n)
+            log_ground_reaction(self.rec, (ns - t0) * 1e-9, force[:, [0, 2]], cop_x_from_wrench(force, torque),
+                                self.body_weight_n)
         if self._markers:
             msgs, self._markers[:] = list(self._markers), []
             ns = np.array([stamp_ns(m.header.stamp) for m in msgs], np.int64)

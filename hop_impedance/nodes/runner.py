@@ -28,7 +28,13 @@ from rclpy.node import Node
 
 from hop_impedance.child_env import child_env
 from hop_impedance.nodes.common import (
-    CONTROLLER_TOPIC, DIAGNOSTICS_TOPIC, PROFILE_TOPIC, PROGRESS_TOPIC, STANCE_KINETICS_TOPIC, SUMMARY_TOPIC, stamp_ns,
+    CONTROLLER_TOPIC,
+    DIAGNOSTICS_TOPIC,
+    PROFILE_TOPIC,
+    PROGRESS_TOPIC,
+    STANCE_KINETICS_TOPIC,
+    SUMMARY_TOPIC,
+    stamp_ns,
     warm_up_logging,
 )
 from hop_impedance.nodes.qos import latched_qos, result_qos
@@ -144,7 +150,6 @@ class ResultCollector(Node):
 
     def __init__(self, **kwargs) -> None:
         from diagnostic_msgs.msg import DiagnosticArray
-
         from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, Progress, StanceSummary
 
         super().__init__("result_collector", **kwargs)
@@ -353,7 +358,10 @@ def _yaml(v) -> str:
 
 
 def start_children(names, cfg: PipelineConfig, log_dir: Path) -> dict[str, subprocess.Popen]:
-    """Start node processes (``child_env()``: inherited environment minus the bootstrap marker); stdout/stderr to ``log_dir/<name>.log``."""
+    """Start node processes (``child_env()``: inherited environment minus the bootstrap marker).
+
+    stdout/stderr go to ``log_dir/<name>.log``.
+    """
     params = node_parameters(cfg)
     children = {}
     for name in names:

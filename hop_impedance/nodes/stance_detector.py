@@ -28,18 +28,28 @@ import time
 
 import numpy as np
 from geometry_msgs.msg import WrenchStamped
+from hop_impedance_msgs.msg import StanceEvent, SubjectInfo
 from rclpy.node import Node
 from std_msgs.msg import Header
 
 from hop_impedance.biomech.stages import StanceDetectorStage, pending_stance
 from hop_impedance.biomech.stance_detection import DetectorOptions
 from hop_impedance.nodes.common import (
-    END_TOPIC, EVENTS_TOPIC, Diagnostics, InputTracker, ProgressReporter, ReorderBuffer, declare, declare_stream_parameters, seconds_to_ns,
-    set_stamp, stamp_ns, wrench_from_cdr,
+    END_TOPIC,
+    EVENTS_TOPIC,
+    Diagnostics,
+    InputTracker,
+    ProgressReporter,
+    ReorderBuffer,
+    declare,
+    declare_stream_parameters,
+    seconds_to_ns,
+    set_stamp,
+    stamp_ns,
+    wrench_from_cdr,
 )
 from hop_impedance.nodes.qos import input_qos, latched_qos, result_qos
 from hop_impedance.recording import FORCE_TOPIC, GRAVITY_M_S2, SUBJECT_TOPIC
-from hop_impedance_msgs.msg import StanceEvent, SubjectInfo
 
 
 class StanceDetectorNode(Node):
