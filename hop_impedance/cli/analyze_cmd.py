@@ -161,16 +161,33 @@ def analyze_and_fit(rec, options, model_terms: list[str] | None, fit: bool = Tru
 def run(args: argparse.Namespace) -> int:
     """Load, analyse, write the JSON; print a one-line summary on stderr."""
     import json
-    import os
     import sys
-    from dataclasses import replace
 
+    from hop_impedance.cli.json_output import json_output
+    from hop_impedance.impedance.report import write_report
+
+    options = _options_from_args(args)
+    with json_output(args.json) as write_json:
+        docs: list[dict] = []
+        records: list = []
+        conditions: list[str] = []
+        terms = args.model_terms.split(",") if args.model_terms else None
+        for path in args.recordings:
+            docs.append(_analyze_path(path, args, options, terms, records, conditions))
+        if args.report:
+            written = write_report(records, conditions, args.report)
+            print(f"hop-impedance analyze: report ({len(written)} files) -> {args.report}", file=sys.stderr)
+        doc = docs[0] if len(docs) == 1 else docs
+        write_json(json.dumps(doc, indent=args.indent, allow_nan=False))
+    print(_summary_line(docs, args), file=sys.stderr)
+    return 0
+
+
+def _options_from_args(args: argparse.Namespace):
+    """``AnalysisOptions`` from the flags, after the checks that need no recording (one-line ValueErrors)."""
     from hop_impedance.biomech.analysis import AnalysisOptions
     from hop_impedance.biomech.body_model import load_overrides
-    from hop_impedance.biomech.per_leg import analyses_to_json, analyze_legs
     from hop_impedance.biomech.stance_detection import DetectorOptions
-    from hop_impedance.cli.json_output import json_output
-    from hop_impedance.impedance.report import fit_records, write_report
 
     if not args.cutoff_hz > 0:
         raise ValueError(f"--cutoff-hz must be > 0, got {args.cutoff_hz}")
@@ -180,43 +197,49 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--report needs the fits; drop --no-fit")
     if args.report and args.per_leg:
         raise ValueError("--report is for the lumped analysis; drop --per-leg or --report")
-    options = AnalysisOptions(
+    return AnalysisOptions(
         marker_cutoff_hz=args.cutoff_hz,
         force_cutoff_hz=args.cutoff_hz,
         max_gap_s=args.max_gap_s,
         overrides=load_overrides(args.segments) if args.segments else None,
         detector=DetectorOptions.from_settings(args.detector),
     )
-    with json_output(args.json) as write_json:
-        docs: list[dict] = []
-        records: list = []
-        conditions: list[str] = []
-        terms = args.model_terms.split(",") if args.model_terms else None
-        for path in args.recordings:
-            rec, bilateral = checked_recording(path, args, min(options.marker_cutoff_hz, options.force_cutoff_hz),
-                                               args.per_leg)
-            for warning in rec.warnings:
-                named = warning if warning.startswith(f"{os.path.basename(path)}:") else f"{path}: {warning}"
-                print(f"hop-impedance analyze: warning: {named}", file=sys.stderr)
-            if bilateral is not None:
-                fits = None if args.no_fit else (lambda d, a: add_fits_to_json(d, a, terms))
-                docs.append(analyses_to_json(analyze_legs(replace(bilateral, recording=rec), options), fits))
-                continue
-            analysis, doc, fits = analyze_and_fit(rec, options, terms, fit=not args.no_fit)
-            if fits is not None:
-                label = condition_label(analysis, path, conditions)
-                conditions.append(label)
-                records += fit_records(fits, label, analysis.subject.subject_id)
-            docs.append(doc)
-        if args.report:
-            written = write_report(records, conditions, args.report)
-            print(f"hop-impedance analyze: report ({len(written)} files) -> {args.report}", file=sys.stderr)
-        doc = docs[0] if len(docs) == 1 else docs
-        write_json(json.dumps(doc, indent=args.indent, allow_nan=False))
+
+
+def _analyze_path(path: str, args: argparse.Namespace, options, terms: list[str] | None, records: list,
+                  conditions: list[str]) -> dict:
+    """The JSON document of one recording (per leg with ``--per-leg``), its warnings printed on stderr.
+
+    A lumped analysis with fits also appends its fit records and its
+    condition label to ``records`` and ``conditions`` (for ``--report``).
+    """
+    import os
+    import sys
+    from dataclasses import replace
+
+    from hop_impedance.biomech.per_leg import analyses_to_json, analyze_legs
+    from hop_impedance.impedance.report import fit_records
+
+    rec, bilateral = checked_recording(path, args, min(options.marker_cutoff_hz, options.force_cutoff_hz), args.per_leg)
+    for warning in rec.warnings:
+        named = warning if warning.startswith(f"{os.path.basename(path)}:") else f"{path}: {warning}"
+        print(f"hop-impedance analyze: warning: {named}", file=sys.stderr)
+    if bilateral is not None:
+        fits = None if args.no_fit else (lambda d, a: add_fits_to_json(d, a, terms))
+        return analyses_to_json(analyze_legs(replace(bilateral, recording=rec), options), fits)
+    analysis, doc, fits = analyze_and_fit(rec, options, terms, fit=not args.no_fit)
+    if fits is not None:
+        label = condition_label(analysis, path, conditions)
+        conditions.append(label)
+        records += fit_records(fits, label, analysis.subject.subject_id)
+    return doc
+
+
+def _summary_line(docs: list[dict], args: argparse.Namespace) -> str:
+    """The one-line summary: stances, stances with inverse dynamics, solved joint fits, output."""
     stances = [s for d in docs for s in d["stances"]]
     n = len(stances)
     ok = sum(1 for s in stances if s["joints"] is not None)
     fitted = sum(1 for s in stances for j in (s["joints"] or {}).values() if (j.get("fit") or {}).get("status") == "solved")
     fit_note = "" if args.no_fit else f", {fitted} joint fits"
-    print(f"hop-impedance analyze: {n} stances, {ok} with inverse dynamics{fit_note} -> {args.json}", file=sys.stderr)
-    return 0
+    return f"hop-impedance analyze: {n} stances, {ok} with inverse dynamics{fit_note} -> {args.json}"
