@@ -81,69 +81,97 @@ def print_report(report, recording: str, tolerate_loss: bool = False) -> int:
     (or ``tolerate_loss``); 1 otherwise; 130 after Ctrl-C. Problems are one line
     each on stderr, never a traceback.
     """
-    import sys
-
     from hop_impedance.io.mcap_io import summarize
-    from hop_impedance.nodes.runner import loss_lines, messages_lost, stance_table
-
-    def problem(text: str) -> None:
-        print(f"hop-impedance pipeline: {text}", file=sys.stderr)
-
-    from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
+    from hop_impedance.nodes.runner import loss_lines, stance_table
 
     for warning in report.input_warnings:
-        problem(f"warning: {warning}")
+        _problem(f"warning: {warning}")
     counts = {i.topic: i.count for i in summarize(recording)}
-    missing = {FORCE_TOPIC: "no stances can be detected", MARKER_TOPIC: "stances have no joint data",
-               SUBJECT_TOPIC: "mass and height come from parameters or the run stops"}
-    for topic, consequence in missing.items():
-        if not counts.get(topic):
-            problem(f"warning: the recording has no {topic} messages: {consequence}")
+    _warn_missing_topics(counts)
     for line in stance_table(report):
         print(line)
     for line in loss_lines(report, counts):
         print(line)
-    est = "/impedance_estimator"
+    _print_estimator_figures(report)
+    _print_dropped_inputs(report)
+    return _exit_code(report, counts, tolerate_loss)
 
-    def ms(key: str) -> str:
-        """A millisecond diagnostic (a string on /diagnostics) to one decimal, '?' when missing."""
-        value = report.diag(est, key, "?")
-        try:
-            return f"{float(value):.1f}"
-        except ValueError:
-            return value
 
+def _problem(text: str) -> None:
+    """One problem line on stderr."""
+    import sys
+
+    print(f"hop-impedance pipeline: {text}", file=sys.stderr)
+
+
+def _warn_missing_topics(counts: dict[str, int]) -> None:
+    """A warning, with its consequence, per contract topic the file lacks (``counts``: messages per topic)."""
+    from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
+
+    missing = {FORCE_TOPIC: "no stances can be detected", MARKER_TOPIC: "stances have no joint data",
+               SUBJECT_TOPIC: "mass and height come from parameters or the run stops"}
+    for topic, consequence in missing.items():
+        if not counts.get(topic):
+            _problem(f"warning: the recording has no {topic} messages: {consequence}")
+
+
+#: The node whose /diagnostics carry the model structures and the fit and latency figures.
+_ESTIMATOR = "/impedance_estimator"
+
+
+def _ms(report, key: str) -> str:
+    """A millisecond diagnostic of the estimator (a string on /diagnostics) to one decimal, '?' when missing."""
+    value = report.diag(_ESTIMATOR, key, "?")
+    try:
+        return f"{float(value):.1f}"
+    except ValueError:
+        return value
+
+
+def _print_estimator_figures(report) -> None:
+    """Model structure per joint, fit and take-off-to-profile times, the output files."""
     for joint in ("ankle", "knee", "hip"):  # one model structure per joint (impedance_estimator, recording_fits)
-        print(f"model {joint}: {report.diag(est, f'model_{joint}', '?')}")
-    print(f"fit p50/p99: {ms('fit_p50_ms')}/{ms('fit_p99_ms')} ms; "
-          f"take-off to profile p50/p99: {ms('takeoff_to_profile_p50_ms')}/{ms('takeoff_to_profile_p99_ms')} ms")
+        print(f"model {joint}: {report.diag(_ESTIMATOR, f'model_{joint}', '?')}")
+    print(f"fit p50/p99: {_ms(report, 'fit_p50_ms')}/{_ms(report, 'fit_p99_ms')} ms; "
+          f"take-off to profile p50/p99: {_ms(report, 'takeoff_to_profile_p50_ms')}/"
+          f"{_ms(report, 'takeoff_to_profile_p99_ms')} ms")
     print(f"output: {report.output_mcap}  ({report.wall_s:.1f} s wall)")
     if getattr(report, "rrd", None):
         print(f"Rerun recording: {report.rrd}  (open it with: .venv/bin/rerun {report.rrd})")
+
+
+def _print_dropped_inputs(report) -> None:
+    """Warnings for input messages the nodes dropped: later than the reorder window, or a repeated stamp."""
     for node in ("/stance_detector", "/inverse_dynamics"):
         late = sum(int(report.diag(node, k, "0") or 0) for k in ("force_late_dropped", "markers_late_dropped"))
         if late:
-            problem(f"warning: {node}: {late} input messages arrived later than the reorder window and were not used")
+            _problem(f"warning: {node}: {late} input messages arrived later than the reorder window and were not used")
     dups = sum(int(report.diag("/inverse_dynamics", k, "0") or 0)
                for k in ("force_duplicates_dropped", "markers_duplicates_dropped"))
     if dups:
-        problem(f"warning: /inverse_dynamics: {dups} input messages with a repeated header.stamp dropped")
+        _problem(f"warning: /inverse_dynamics: {dups} input messages with a repeated header.stamp dropped")
+
+
+def _exit_code(report, counts: dict[str, int], tolerate_loss: bool) -> int:
+    """Print the input-check lines and the run's end state; the exit code :func:`print_report` documents."""
+    from hop_impedance.nodes.runner import messages_lost
+
     code = 0
     for note in input_notes(report):
-        problem(note)
+        _problem(note)
         code = 1 if note.startswith("error") else code
     if report.interrupted:
-        problem(f"interrupted; {len(report.summaries)} stances finished (table above)")
+        _problem(f"interrupted; {len(report.summaries)} stances finished (table above)")
         return 130
     if report.died:
-        problem(f"error: {report.died}; {len(report.summaries)} stances finished (table above)")
+        _problem(f"error: {report.died}; {len(report.summaries)} stances finished (table above)")
         return 1
     if not report.finished:
-        problem("error: did not finish in time (see the losses above and the logs)")
+        _problem("error: did not finish in time (see the losses above and the logs)")
         return 1
     lost = messages_lost(report, counts)
     if lost and not tolerate_loss:
-        problem(f"error: {lost} input messages lost on the way (lines above); pass --tolerate-loss to accept")
+        _problem(f"error: {lost} input messages lost on the way (lines above); pass --tolerate-loss to accept")
         return 1
     return code
 
