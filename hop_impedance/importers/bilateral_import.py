@@ -28,8 +28,8 @@ from hop_impedance.bilateral import SIDES, BilateralRecording
 from hop_impedance.importers.frames import to_contract
 from hop_impedance.importers.marker_mapping import MarkerMapping
 from hop_impedance.importers.plates import total_wrench
-from hop_impedance.importers.session import LabSession, session_to_recording
-from hop_impedance.recording import ForcePlateSeries
+from hop_impedance.importers.session import LabSession, PlateData, session_to_recording
+from hop_impedance.recording import ForcePlateSeries, Recording
 
 #: A plate is "loaded" (assigned to a foot) when its vertical force exceeds this on some sample (N).
 LOADED_N = 20.0
@@ -60,6 +60,24 @@ def session_to_bilateral(
         raise ValueError(f"{session.source or 'session'}: per-leg import needs markers (to tell the feet's plates apart)")
     frame: dict = {}
     rec = session_to_recording(session, right, frame_out=frame, **options)
+    left_rec = _left_leg_recording(session, left, rec, frame, options)
+    chosen = session.plates if options.get("plates") is None else [session.plates[i] for i in options["plates"]]
+    per_plate = _plate_reactions(chosen, frame["rotation"], frame["origin"], rec.force.force_n)
+    ankle_y = {
+        "right": float(np.nanmedian(rec.markers.marker("ankle")[:, 1])),
+        "left": float(np.nanmedian(left_rec.markers.marker("ankle")[:, 1])),
+    }
+    sums, notes = _wrench_per_foot(chosen, per_plate, ankle_y, rec.force)
+    rec.warnings.extend(notes)
+    plates = {side: ForcePlateSeries(rec.force.stamp_ns.copy(), f, m) for side, (f, m) in sums.items()}
+    left_markers = left_rec.markers
+    head = left_markers.names.index("head")
+    left_markers.positions_m[:, head] = rec.markers.marker("head")  # contract v2: one head marker (one HAT)
+    return BilateralRecording(rec, plates, left_markers)
+
+
+def _left_leg_recording(session: LabSession, left: MarkerMapping, rec: Recording, frame: dict, options: dict) -> Recording:
+    """The v1 import with the left map, the right one's subject and origin; the lab axes must agree."""
     left_options = {**options, "mass_kg": rec.subject.body_mass_kg, "height_m": rec.subject.body_height_m}
     left_frame: dict = {}
     left_rec = session_to_recording(replace(session, origin_m=frame["origin"]), left, frame_out=left_frame, **left_options)
@@ -67,8 +85,14 @@ def session_to_bilateral(
         raise ValueError(
             f"{session.source or 'session'}: the left marker map gives other lab axes than the right one; give --up and --forward"
         )
-    chosen = session.plates if options.get("plates") is None else [session.plates[i] for i in options["plates"]]
-    rotation, origin = frame["rotation"], frame["origin"]
+    return left_rec
+
+
+def _plate_reactions(
+    chosen: list[PlateData], rotation: np.ndarray, origin: np.ndarray, summed_force_n: np.ndarray
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Each plate's (force N, moment N m about the contract origin) in contract axes, with the sign the
+    v1 import gave the summed wrench (negated when the file gives the action on the plate)."""
     per_plate = []
     for p in chosen:
         f = to_contract(p.force_n, rotation)
@@ -76,14 +100,19 @@ def session_to_bilateral(
         r = np.broadcast_to(to_contract(p.point_m, rotation, origin), p.force_n.shape)
         per_plate.append(total_wrench(f[None], m[None], r[None], np.zeros(3)))
     raw_sum = sum(f for f, _ in per_plate)
-    sign = -1.0 if np.allclose(raw_sum, -rec.force.force_n, atol=1e-6) and np.any(raw_sum) else 1.0
-    per_plate = [(sign * f, sign * m) for f, m in per_plate]
-    ankle_y = {
-        "right": float(np.nanmedian(rec.markers.marker("ankle")[:, 1])),
-        "left": float(np.nanmedian(left_rec.markers.marker("ankle")[:, 1])),
-    }
-    stamps = rec.force.stamp_ns
-    sums = {side: [np.zeros_like(rec.force.force_n), np.zeros_like(rec.force.torque_nm)] for side in SIDES}
+    sign = -1.0 if np.allclose(raw_sum, -summed_force_n, atol=1e-6) and np.any(raw_sum) else 1.0
+    return [(sign * f, sign * m) for f, m in per_plate]
+
+
+def _wrench_per_foot(
+    chosen: list[PlateData],
+    per_plate: list[tuple[np.ndarray, np.ndarray]],
+    ankle_y: dict[str, float],
+    summed: ForcePlateSeries,
+) -> tuple[dict[str, list[np.ndarray]], list[str]]:
+    """Sum the loaded plates per foot (the side whose ankle is laterally closest to the plate's
+    force-weighted mean centre of pressure); side -> [force, moment], and a note per decision."""
+    sums = {side: [np.zeros_like(summed.force_n), np.zeros_like(summed.torque_nm)] for side in SIDES}
     notes = []
     for p, (f, m) in zip(chosen, per_plate):
         loaded = f[:, 2] > LOADED_N
@@ -98,13 +127,7 @@ def session_to_bilateral(
     for side in SIDES:
         if not np.any(sums[side][0][:, 2] > LOADED_N):
             notes.append(f"no plate carried the {side} foot: its wrench is zero (leg in the air or off the plates)")
-    rec.warnings.extend(notes)
-    plates = {side: ForcePlateSeries(stamps.copy(), f, m) for side, (f, m) in sums.items()}
-    left_markers = left_rec.markers
-    head = left_markers.names.index("head")
-    left_markers.positions_m[:, head] = rec.markers.marker("head")  # contract v2: one head marker (one HAT)
-    return BilateralRecording(rec, plates, left_markers)
-
+    return sums, notes
 
 def bilateral_from_session(session: LabSession, markers=None, **options) -> BilateralRecording:
     """:func:`session_to_bilateral` with the right map chosen as the v1 import does and its ``_left`` twin.
