@@ -201,12 +201,13 @@ def _ground_origin(plates: list[PlateData], rotation: np.ndarray) -> np.ndarray:
 def _resolve_axes(
     session: LabSession,
     mapping: MarkerMapping | None,
-    six: np.ndarray | None,
+    picked: _PickedMarkers | None,
     up: str | None,
     forward: str | None,
-    labels: list[str] | None = None,
-    positions: np.ndarray | None = None,
 ) -> tuple[np.ndarray, list[str]]:
+    """Step 3: rotation lab -> contract from the vertical (option, file hint checked against the body,
+    or toe->head) and the heading (option, rear->front marker pairs, or the lab's axes without markers)."""
+    six = picked.six_lab_m if picked is not None else None
     notes = []
     if up is not None:
         up_vec = parse_axis(up)
@@ -230,8 +231,8 @@ def _resolve_axes(
         raise ValueError("the vertical axis is unknown: give it (--up +Z)")
     if forward is not None:
         fwd = parse_axis(forward)
-    elif six is not None and mapping is not None and labels is not None and positions is not None:
-        rear, front = forward_pair_positions(labels, positions, mapping)
+    elif picked is not None and mapping is not None:
+        rear, front = forward_pair_positions(picked.labels, picked.positions_m, mapping)
         fwd = detect_forward(rear, front, up_vec)
         notes.append(f"subject faces lab {_vector_text(fwd)} (detected from {len(rear)} rear->front marker pair(s))")
     else:
@@ -292,7 +293,7 @@ def session_to_recording(
     sex: str = "female",
     frame_out: dict | None = None,
 ) -> Recording:
-    """Map a lab session to a contract recording.
+    """Map a lab session to a contract recording (the module docstring's steps 1-5, in order).
 
     Parameters
     ----------
@@ -302,69 +303,97 @@ def session_to_recording(
     up, forward : str, optional
         Signed lab axes (``"+Y"``) overriding the file's hint and the detection.
     mass_kg : float or ``"auto"``, optional
-        Overrides the file. ``"auto"`` estimates it from quiet standing on the
-        plates (with a warning). Without it and without a file value the
-        import fails with a clear message.
+        Overrides the file. ``"auto"`` estimates it from quiet standing on the plates (with a
+        warning). Without it and without a file value the import fails with a clear message.
     height_m : float, optional
-        Overrides the file; otherwise the file's value, else an estimate from
-        the leg markers (:func:`estimate_height_from_leg`, with a warning).
+        Overrides the file; otherwise the file's value, else an estimate from the leg markers
+        (:func:`estimate_height_from_leg`, with a warning).
     plates : list of int, optional
         0-based plates to use; default all, summed.
     sex : str
         For the de Leva tables.
     frame_out : dict, optional
-        Filled with ``rotation`` (lab -> contract, 3x3) and ``origin`` (m, lab)
-        so that a caller can express each plate in the same frame
-        (:mod:`hop_impedance.importers.bilateral_import`).
+        Filled with ``rotation`` (lab -> contract, 3x3) and ``origin`` (m, lab) so that a caller can
+        express each plate in the same frame (:mod:`hop_impedance.importers.bilateral_import`).
 
     Returns
     -------
     Recording
-        Contract frame (x forward, y left, z up), origin on the ground at the
-        plates' common origin, SI units; ``warnings`` says what was detected
-        or estimated.
+        Contract frame (x forward, y left, z up), origin on the ground at the plates' common origin,
+        SI units; ``warnings`` says what was detected or estimated.
 
     Raises
     ------
     ValueError
-        Missing markers (named), no force plate, inconsistent rates, unknown
-        mass or height, unknown axes.
+        Missing markers (named), no force plate, inconsistent rates, unknown mass or height, unknown axes.
     """
     warnings = list(session.warnings)
+    chosen = _chosen_plates(session, plates, warnings)
+    picked = _pick_contract_markers(session, mapping, sex, warnings) if session.marker_positions_m is not None else None
+    rotation, notes = _resolve_axes(session, mapping, picked, up, forward)
+    warnings += notes
+    origin = session.origin_m if session.origin_m is not None else _ground_origin(chosen, rotation)
+    if frame_out is not None:
+        frame_out.update(rotation=rotation, origin=np.asarray(origin, float))
+    force, moment = _reaction_on_subject(chosen, rotation, origin, warnings)
+    markers = None if picked is None else _markers_on_the_ground(session, picked, rotation, origin, mapping, warnings)
+    mass = _resolve_mass(mass_kg, session, force[:, 2], warnings)  # step 5: mass, then height
+    subject = Subject(session.subject_id or "unknown", mass, _resolve_height(height_m, session, markers, warnings), sex)
+    stamps_ns = _stamps_ns(session.force_time_s)
+    return Recording(ForcePlateSeries(stamps_ns, force, moment), markers, subject, session.source, warnings)
+
+
+def _chosen_plates(session: LabSession, plates: list[int] | None, warnings: list[str]) -> list[PlateData]:
+    """Step 1 for the plates: the plates to sum (all by default), their one constant rate checked."""
     if not session.plates:
         raise ValueError(f"{session.source or 'session'}: no force plate found")
     chosen = session.plates if plates is None else [session.plates[i] for i in _check_plates(plates, len(session.plates))]
     force_rate = sampling_rate_hz(session.force_time_s, "force plate")
     if (w := _rate_warning(force_rate, CONTRACT_FORCE_RATE_HZ, "force")) is not None:
         warnings.append(w + ": stance edges are only known to one sample")
+    return chosen
 
-    six = None
-    if session.marker_positions_m is not None:
-        if mapping is None:
-            raise ValueError("the session has markers: a marker mapping is needed (--markers NAME or YAML)")
-        assert session.marker_time_s is not None  # a session's marker positions come with their times
-        marker_rate = sampling_rate_hz(session.marker_time_s, "markers")
-        if (w := _rate_warning(marker_rate, CONTRACT_MARKER_RATE_HZ, "marker")) is not None:
-            warnings.append(w)
-        labels, positions, virtual_notes = with_virtual_markers(
-            session.marker_labels, session.marker_positions_m, mapping, session.parameters, sex
-        )
-        six = contract_markers(labels, positions, mapping)
-        warnings += [f"marker map {mapping.name}: {line}" for line in source_notes(labels, mapping, virtual_notes)]
-        _check_overlap(session.marker_time_s, session.force_time_s, warnings)
-        missing = np.isnan(six).any(axis=2).mean(axis=0)
-        for name, frac in zip(MARKER_NAMES, missing):
-            if frac > 0:
-                warnings.append(f"marker {name}: {100 * frac:.1f} % of frames occluded (NaN)")
 
-    rotation, notes = _resolve_axes(
-        session, mapping, six, up, forward, *((labels, positions) if six is not None else (None, None))
+@dataclass
+class _PickedMarkers:
+    """The session's markers with the mapping's virtual markers appended, and the contract's six."""
+
+    labels: list[str]
+    #: all markers incl. virtual ones, shape (M, L, 3) (m, lab axes)
+    positions_m: np.ndarray
+    #: the contract's six, :data:`MARKER_NAMES` order, shape (M, 6, 3) (m, lab axes)
+    six_lab_m: np.ndarray
+
+
+def _pick_contract_markers(
+    session: LabSession, mapping: MarkerMapping | None, sex: str, warnings: list[str]
+) -> _PickedMarkers:
+    """Steps 1-2 for the markers: constant rate, virtual markers, the six picked by the mapping, with
+    notes on which label or rule fed each, how the streams overlap and how much is occluded."""
+    if mapping is None:
+        raise ValueError("the session has markers: a marker mapping is needed (--markers NAME or YAML)")
+    assert session.marker_time_s is not None and session.marker_positions_m is not None  # they come together
+    marker_rate = sampling_rate_hz(session.marker_time_s, "markers")
+    if (w := _rate_warning(marker_rate, CONTRACT_MARKER_RATE_HZ, "marker")) is not None:
+        warnings.append(w)
+    labels, positions, virtual_notes = with_virtual_markers(
+        session.marker_labels, session.marker_positions_m, mapping, session.parameters, sex
     )
-    warnings += notes
-    origin = session.origin_m if session.origin_m is not None else _ground_origin(chosen, rotation)
-    if frame_out is not None:
-        frame_out.update(rotation=rotation, origin=np.asarray(origin, float))
+    six = contract_markers(labels, positions, mapping)
+    warnings += [f"marker map {mapping.name}: {line}" for line in source_notes(labels, mapping, virtual_notes)]
+    _check_overlap(session.marker_time_s, session.force_time_s, warnings)
+    missing = np.isnan(six).any(axis=2).mean(axis=0)
+    for name, frac in zip(MARKER_NAMES, missing):
+        if frac > 0:
+            warnings.append(f"marker {name}: {100 * frac:.1f} % of frames occluded (NaN)")
+    return _PickedMarkers(labels, positions, six)
 
+
+def _reaction_on_subject(
+    chosen: list[PlateData], rotation: np.ndarray, origin: np.ndarray, warnings: list[str]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Step 4: the plates' wrenches in contract axes summed about the contract origin, as the reaction
+    on the subject (force N, moment N m)."""
     f = np.stack([to_contract(p.force_n, rotation) for p in chosen])
     m = np.stack([to_contract(p.moment_nm, rotation) for p in chosen])
     r = np.stack([np.broadcast_to(to_contract(p.point_m, rotation, origin), p.force_n.shape) for p in chosen])
@@ -372,31 +401,28 @@ def session_to_recording(
     force, moment, flipped = orient_reaction(force, moment)
     if flipped:
         warnings.append("plates gave the force on the plate (vertical down): negated to the reaction on the subject")
+    return force, moment
 
-    markers = None
-    if six is not None:
-        assert mapping is not None and session.marker_time_s is not None  # six is made only from both (above)
-        six_c = to_contract(six, rotation, origin)
-        for name in mapping.lower_to_sole:
-            drop = lower_to_sole(six_c, name)
-            warnings.append(
-                f"marker {name} lowered by {1e3 * drop:.1f} mm to the sole (its height above the plate in flat stance)"
-                if drop > 0
-                else f"marker {name} not lowered to the sole: it goes below the plates' surface (floor not at plate level?)"
-            )
-        markers = MarkerSeries(_stamps_ns(session.marker_time_s), MARKER_NAMES, six_c)
 
-    fz = force[:, 2]
-    subject = Subject(
-        session.subject_id or "unknown",
-        _resolve_mass(mass_kg, session, fz, warnings),
-        _resolve_height(height_m, session, markers, warnings),
-        sex,
-    )
-    return Recording(
-        ForcePlateSeries(_stamps_ns(session.force_time_s), force, moment), markers, subject, session.source, warnings
-    )
-
+def _markers_on_the_ground(
+    session: LabSession,
+    picked: _PickedMarkers,
+    rotation: np.ndarray,
+    origin: np.ndarray,
+    mapping: MarkerMapping | None,
+    warnings: list[str],
+) -> MarkerSeries:
+    """The six markers in the contract frame, the mapping's shoe markers lowered to the sole."""
+    assert mapping is not None and session.marker_time_s is not None  # markers are picked only with both
+    six_c = to_contract(picked.six_lab_m, rotation, origin)
+    for name in mapping.lower_to_sole:
+        drop = lower_to_sole(six_c, name)
+        warnings.append(
+            f"marker {name} lowered by {1e3 * drop:.1f} mm to the sole (its height above the plate in flat stance)"
+            if drop > 0
+            else f"marker {name} not lowered to the sole: it goes below the plates' surface (floor not at plate level?)"
+        )
+    return MarkerSeries(_stamps_ns(session.marker_time_s), MARKER_NAMES, six_c)
 
 #: Percentile of a foot marker's height taken as its height in flat stance.
 SOLE_PERCENTILE = 5.0
