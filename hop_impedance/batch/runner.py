@@ -242,62 +242,94 @@ def run_batch(
     -------
     BatchSummary
     """
-    from hop_impedance import __version__
-
     options = options or BatchOptions()
+    _check_group_by(items, group_by)
+    run = _BatchRun(Path(out_dir), BatchSummary(total=len(items)))
+    todo = run.plan(items, options, force)
+    run.start_progress(len(todo), progress_stream)
+    t0 = time.perf_counter()
+    if todo and mode == "serial":
+        for item, key in todo:
+            run.handle(item, key, analyze_item(item, options))
+    elif todo:
+        run.summary.workers = _with_client(mode, workers, client, lambda c: _run_distributed(c, todo, options, run.handle))
+    return run.finish(items, group_by, time.perf_counter() - t0)
+
+
+def _check_group_by(items: list[BatchItem], group_by: str | None) -> None:
+    """``--group-by`` must be one of :data:`GROUP_KEYS` or a column of the manifest (ValueError naming them)."""
     labels = {k for i in items for k, _ in i.labels}
     if group_by is not None and group_by not in GROUP_KEYS and group_by not in labels:
         raise ValueError(f"--group-by {group_by!r}: expected one of {', '.join(GROUP_KEYS)} or a manifest column"
                          + (f" ({', '.join(sorted(labels))})" if labels else ""))
-    out = Path(out_dir)
-    (out / "json").mkdir(parents=True, exist_ok=True)
-    (out / ".batch").mkdir(exist_ok=True)
-    summary = BatchSummary(total=len(items))
-    failures: dict[str, tuple[str, str, str]] = {}
-    todo = []
-    for item in items:
-        try:
-            key = cache_key(item, options, file_sha256(item.path))
-        except OSError as exc:
-            failures[item.name] = (item.name, item.path, f"{type(exc).__name__}: {exc.strerror or exc}")
-            continue
-        stored = None if force else _up_to_date(out / ".batch" / f"{item.name}.pkl",
-                                                 out / "json" / f"{item.name}.json", key)
-        if stored is not None:
-            summary.outcomes[item.name] = stored
-            summary.skipped += 1
-        else:
-            todo.append((item, key))
-    progress = Progress(len(todo), summary.skipped, progress_stream)
-    progress.show()
 
-    def handle(item: BatchItem, key: str, outcome: Outcome) -> None:
+
+@dataclass
+class _BatchRun:
+    """One run's bookkeeping in ``out``: what is to do, what came back, what failed, the progress line."""
+
+    out: Path
+    summary: BatchSummary
+    #: name -> (name, path, reason) of the recordings not analysed
+    failures: dict[str, tuple[str, str, str]] = field(default_factory=dict)
+    progress: Progress | None = None
+
+    def plan(self, items: list[BatchItem], options: BatchOptions, force: bool) -> list[tuple[BatchItem, str]]:
+        """Make the output folders; return (item, skip key) of each recording to analyse. Up-to-date ones
+        (the module docstring's skip rule; none with ``force``) go straight into the summary, unreadable
+        inputs into the failures."""
+        (self.out / "json").mkdir(parents=True, exist_ok=True)
+        (self.out / ".batch").mkdir(exist_ok=True)
+        todo = []
+        for item in items:
+            try:
+                key = cache_key(item, options, file_sha256(item.path))
+            except OSError as exc:
+                self.failures[item.name] = (item.name, item.path, f"{type(exc).__name__}: {exc.strerror or exc}")
+                continue
+            stored = None if force else _up_to_date(self.out / ".batch" / f"{item.name}.pkl",
+                                                    self.out / "json" / f"{item.name}.json", key)
+            if stored is not None:
+                self.summary.outcomes[item.name] = stored
+                self.summary.skipped += 1
+            else:
+                todo.append((item, key))
+        return todo
+
+    def start_progress(self, n_todo: int, stream) -> None:
+        """Show the progress line (``stream``: default stderr)."""
+        self.progress = Progress(n_todo, self.summary.skipped, stream)
+        self.progress.show()
+
+    def handle(self, item: BatchItem, key: str, outcome: Outcome) -> None:
+        """Store one task's outcome (JSON, then the skip marker) or record its failure, removing any stale
+        output of an earlier run; a worker running another package version counts as a failure."""
+        from hop_impedance import __version__
+
         if outcome.error is None and outcome.version != __version__:
             outcome = Outcome(name=item.name, error=f"worker runs hop_impedance {outcome.version}, "
                                                      f"this command {__version__}")
         if outcome.error is not None:
-            failures[item.name] = (item.name, item.path, outcome.error)
+            self.failures[item.name] = (item.name, item.path, outcome.error)
             # no stale output of an earlier run of a recording that now fails
-            (out / ".batch" / f"{item.name}.pkl").unlink(missing_ok=True)
-            (out / "json" / f"{item.name}.json").unlink(missing_ok=True)
+            (self.out / ".batch" / f"{item.name}.pkl").unlink(missing_ok=True)
+            (self.out / "json" / f"{item.name}.json").unlink(missing_ok=True)
         else:
-            summary.outcomes[item.name] = _store(out, outcome, key)
-            summary.analysed += 1
-        progress.update(outcome.error is None)
+            self.summary.outcomes[item.name] = _store(self.out, outcome, key)
+            self.summary.analysed += 1
+        assert self.progress is not None  # started before any task runs
+        self.progress.update(outcome.error is None)
 
-    t0 = time.perf_counter()
-    if todo and mode == "serial":
-        for item, key in todo:
-            handle(item, key, analyze_item(item, options))
-    elif todo:
-        summary.workers = _with_client(mode, workers, client, lambda c: _run_distributed(c, todo, options, handle))
-    summary.seconds = time.perf_counter() - t0
-    progress.show(final=True)
-    summary.failures = [failures[i.name] for i in items if i.name in failures]
-    summary.failed = len(summary.failures)
-    summary.files = _write_outputs(items, summary, out, group_by)
-    return summary
-
+    def finish(self, items: list[BatchItem], group_by: str | None, seconds: float) -> BatchSummary:
+        """Close the progress line, list the failures in ``items`` order, write tables and figures."""
+        summary = self.summary
+        summary.seconds = seconds
+        assert self.progress is not None  # started by run_batch
+        self.progress.show(final=True)
+        summary.failures = [self.failures[i.name] for i in items if i.name in self.failures]
+        summary.failed = len(summary.failures)
+        summary.files = _write_outputs(items, summary, self.out, group_by)
+        return summary
 
 def _with_client(mode: str, workers: int | None, client, job) -> int:
     """Run ``job(client)`` on the given client, an embedded cluster or the scheduler at ``mode``;
