@@ -23,6 +23,7 @@ the new process and inverse_dynamics was still under way):
   killed node never published a summary without its profiles (summaries are published last).
 """
 
+import collections
 import os
 import signal
 import time
@@ -131,7 +132,14 @@ def test_killed_node_resumes_with_next_complete_stance(tmp_path, victim):
             (f"no result for stances after the restart: targets {targets}, summaries "
              f"{[(stamp_ns(s.touchdown_stamp), s.rejection_reason) for s, _ in col.summaries]} "
              f"({victim} log: {(tmp_path / (victim + '.log')).read_text()[-1500:]})")
-        _spin_until(executor, lambda: False, 0.5, alive)  # the profiles published with the last summary
+        # the profiles published with the last summaries: another topic, so they may arrive after the summary
+        # (reliable, so they do arrive; under load a fixed 0.5 s was once too short for the last stance's two)
+        def profiles_complete() -> bool:
+            got = collections.Counter(stamp_ns(p.touchdown_stamp) for p in col.profiles)
+            want = collections.Counter(stamp_ns(s.touchdown_stamp) for s, _ in col.summaries)
+            return all(got[td] >= 3 * n for td, n in want.items())
+
+        _spin_until(executor, profiles_complete, 10, alive)
     finally:
         stop_children(children)
         rclpy.shutdown(context=context)
