@@ -150,46 +150,21 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
         ``effects_found``, ``stances`` (used / rejected), ``selection``, ``timing``.
     """
     t_start = time.perf_counter()
-    trial = measure_trial(rec)
-    if len(trial.stances) < fs.MIN_STANCES:
-        raise ValueError(f"discovery needs at least {fs.MIN_STANCES} usable stances for held-out testing, "
-                         f"got {len(trial.stances)}")
+    trial = _measured_trial(rec)
     spec = ModelSpec()
     spec_fit, coefs = identify(spec, trial, trial.stances)
-    timing = {"per_candidate_s": {}, "rounds": []}
+    timing: dict = {"per_candidate_s": {}, "rounds": []}
     with fs.HeldOutEvaluator(rec, trial, workers) as ev:
         current = ev.run(spec, [None])[0]
         timing["baseline_s"] = current.seconds
         scales = ev.scales
-        doc = {
-            "schema": SCHEMA,
-            "baseline": {"model": "constant joint stiffness with a free touchdown moment per stance "
-                                  "(M = M_td + k0 (rho - rho0)), no damping, rigid ground, streams in sync, "
-                                  "no active moment",
-                         "parameters": parameters_of(spec_fit, coefs, None),
-                         "evidence": residual_evidence(spec_fit, coefs, trial)},
-            "baseline_gap": current.figures(scales),
-            "steps": [],
-            "stances": {"used": [s.index for s in trial.stances], "rejected": trial.rejected},
-            "selection": {"method": "leave-one-stance-out forward simulation; one-sided t-test of per-stance "
-                                    "log gap ratios, Bonferroni over the step's candidates",
-                          "alpha": fs.ALPHA, "min_shrink": fs.MIN_SHRINK, "gap_scales": scales.tolist(),
-                          "rounds": []},
-        }
+        doc = _baseline_document(spec_fit, coefs, trial, current, scales)
         for _ in range(max_steps):
             cands = fs.remaining(spec)
             if not cands:
                 break
-            t0 = time.perf_counter()
-            runs = ev.run(spec, list(cands))
-            timing["rounds"].append(time.perf_counter() - t0)
-            for r in runs:
-                timing["per_candidate_s"].setdefault(r.effect, []).append(r.seconds)
-            scores = fs.score(trial, current, runs)
-            doc["selection"]["rounds"].append({sc.effect: {
-                "held_out_shrink": sc.shrink, "mean_log_gap_ratio": sc.mean_log_ratio, "p_value": sc.p_value,
-                "passes": fs.passes(sc, len(cands)), "per_stance_log_gap_ratio": np.round(sc.log_ratios, 4).tolist(),
-                "gap_after": sc.runs.figures(scales)["total"], "physics": sc.physics} for sc in scores})
+            scores = _scored_round(ev, spec, trial, current, cands, timing)
+            doc["selection"]["rounds"].append(_round_json(scores, len(cands), scales))
             ok = [sc for sc in scores if fs.passes(sc, len(cands))]
             if not ok:
                 break
@@ -199,31 +174,103 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
             if best.effect == "stream_latency":
                 trial = measure_trial(rec, marker_latency_s=spec.latency_s)
             spec_fit, coefs = identify(spec, trial, trial.stances)
-            amb = fs.ambiguous_with(best, scores)
-            for a in amb:
-                a["separating_evidence"] = SEPARATING_EVIDENCE.get(frozenset({best.effect, a["effect"]}),
-                                                                   "no specific separating evidence in this recording")
-            doc["steps"].append({
-                "effect": best.effect,
-                "evidence": {"held_out_shrink": best.shrink, "mean_log_gap_ratio": best.mean_log_ratio,
-                             "per_stance_log_gap_ratio": np.round(best.log_ratios, 4).tolist(),
-                             "physics": best.physics, "residuals_before": evidence},
-                "parameters": parameters_of(spec, coefs, best.effect),
-                "p_value": best.p_value,
-                "p_value_threshold": fs.ALPHA / len(cands),
-                "ambiguous_with": amb,
-                "gap_before": current.figures(scales),
-                "gap_after": best.runs.figures(scales),
-            })
+            doc["steps"].append(_step_json(best, scores, evidence, parameters_of(spec, coefs, best.effect), len(cands),
+                                           current, scales))
             current = best.runs
     doc["final_gap"] = current.figures(scales)
     doc["effects_found"] = [st["effect"] for st in doc["steps"]]
-    doc["final_model"] = {"effects": list(spec.effects), "parameters": parameters_of(spec_fit, coefs, None),
-                          "latency_s": spec.latency_s, "offset_n": spec.offset_n,
-                          "compliance": list(spec.compliance) if spec.compliance else None,
-                          "stiff_compliance": list(spec.stiff_compliance) if spec.stiff_compliance else None,
-                          "surface_split": spec.surface_split}
+    doc["final_model"] = _final_model_json(spec, spec_fit, coefs)
     timing["per_candidate_s"] = {k: float(np.mean(v)) for k, v in timing["per_candidate_s"].items()}
     timing["total_s"] = time.perf_counter() - t_start
     doc["timing"] = timing
     return doc
+
+
+def _measured_trial(rec: Recording) -> MeasuredTrial:
+    """The recording's stances as discovery measures them; ValueError when too few for held-out testing."""
+    trial = measure_trial(rec)
+    if len(trial.stances) < fs.MIN_STANCES:
+        raise ValueError(f"discovery needs at least {fs.MIN_STANCES} usable stances for held-out testing, "
+                         f"got {len(trial.stances)}")
+    return trial
+
+
+def _baseline_document(spec_fit: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, current: fs.HeldOutRuns,
+                       scales: np.ndarray) -> dict:
+    """The document before any effect is added: the baseline model, its held-out gap, the stances and the method.
+
+    ``steps`` and ``selection.rounds`` start empty; :func:`discover` appends to them.
+    """
+    return {
+        "schema": SCHEMA,
+        "baseline": {"model": "constant joint stiffness with a free touchdown moment per stance "
+                              "(M = M_td + k0 (rho - rho0)), no damping, rigid ground, streams in sync, "
+                              "no active moment",
+                     "parameters": parameters_of(spec_fit, coefs, None),
+                     "evidence": residual_evidence(spec_fit, coefs, trial)},
+        "baseline_gap": current.figures(scales),
+        "steps": [],
+        "stances": {"used": [s.index for s in trial.stances], "rejected": trial.rejected},
+        "selection": {"method": "leave-one-stance-out forward simulation; one-sided t-test of per-stance "
+                                "log gap ratios, Bonferroni over the step's candidates",
+                      "alpha": fs.ALPHA, "min_shrink": fs.MIN_SHRINK, "gap_scales": scales.tolist(),
+                      "rounds": []},
+    }
+
+
+def _scored_round(ev: fs.HeldOutEvaluator, spec: ModelSpec, trial: MeasuredTrial, current: fs.HeldOutRuns,
+                  cands: tuple[str, ...], timing: dict) -> list[fs.ForwardScore]:
+    """One selection round: the held-out runs of ``spec`` plus each candidate, scored against ``current``.
+
+    Adds the round's wall time (s) to ``timing["rounds"]`` and each
+    candidate's to ``timing["per_candidate_s"]``.
+    """
+    t0 = time.perf_counter()
+    runs = ev.run(spec, list(cands))
+    timing["rounds"].append(time.perf_counter() - t0)
+    for r in runs:
+        timing["per_candidate_s"].setdefault(r.effect, []).append(r.seconds)
+    return fs.score(trial, current, runs)
+
+
+def _round_json(scores: list[fs.ForwardScore], n_candidates: int, scales: np.ndarray) -> dict:
+    """``selection.rounds[i]``: every candidate's held-out figures and whether it passed."""
+    return {sc.effect: {
+        "held_out_shrink": sc.shrink, "mean_log_gap_ratio": sc.mean_log_ratio, "p_value": sc.p_value,
+        "passes": fs.passes(sc, n_candidates), "per_stance_log_gap_ratio": np.round(sc.log_ratios, 4).tolist(),
+        "gap_after": sc.runs.figures(scales)["total"], "physics": sc.physics} for sc in scores}
+
+
+def _step_json(best: fs.ForwardScore, scores: list[fs.ForwardScore], evidence: dict, parameters: dict, n_candidates: int,
+               current: fs.HeldOutRuns, scales: np.ndarray) -> dict:
+    """``steps[i]``: the effect added, its evidence, its parameters, and the look-alikes it is ambiguous with.
+
+    ``evidence`` is the residual evidence of the model before the step,
+    ``parameters`` the effect's own ones after it (:func:`parameters_of`),
+    ``current`` the held-out runs before it.
+    """
+    amb = fs.ambiguous_with(best, scores)
+    for a in amb:
+        a["separating_evidence"] = SEPARATING_EVIDENCE.get(frozenset({best.effect, a["effect"]}),
+                                                           "no specific separating evidence in this recording")
+    return {
+        "effect": best.effect,
+        "evidence": {"held_out_shrink": best.shrink, "mean_log_gap_ratio": best.mean_log_ratio,
+                     "per_stance_log_gap_ratio": np.round(best.log_ratios, 4).tolist(),
+                     "physics": best.physics, "residuals_before": evidence},
+        "parameters": parameters,
+        "p_value": best.p_value,
+        "p_value_threshold": fs.ALPHA / n_candidates,
+        "ambiguous_with": amb,
+        "gap_before": current.figures(scales),
+        "gap_after": best.runs.figures(scales),
+    }
+
+
+def _final_model_json(spec: ModelSpec, spec_fit: ModelSpec, coefs: np.ndarray) -> dict:
+    """``final_model``: the effects selected, the fitted law and the non-joint parameters of ``spec``."""
+    return {"effects": list(spec.effects), "parameters": parameters_of(spec_fit, coefs, None),
+            "latency_s": spec.latency_s, "offset_n": spec.offset_n,
+            "compliance": list(spec.compliance) if spec.compliance else None,
+            "stiff_compliance": list(spec.stiff_compliance) if spec.stiff_compliance else None,
+            "surface_split": spec.surface_split}
