@@ -31,6 +31,7 @@ more than 1.5 rad from its touchdown angle), or ``t_max_s``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -313,12 +314,58 @@ def simulate_stance(
     -------
     StanceSimulation
     """
+    _check_stance_inputs(touchdown, friction_coefficient)
+    system = _StanceSystem(chain, law, ground, touchdown, friction_coefficient, trunk_balance=trunk_balance)
+    y = np.concatenate([touchdown.g, touchdown.gd, np.zeros(law.n_states)])
+    events = _stance_events(system, collapse_height_m)
+    run = _integrate_friction_phases(system, events, y, t_max_s, rtol, atol)
+    times = _report_times(run.steps, sample_times_s, run.t_end_s)
+    ys = run.dense(times).T if len(times) else np.zeros((0, len(y)))
+    return _collect(system, times, ys, run.end_reason, run.dense)
+
+
+def _check_stance_inputs(touchdown: TouchdownState, friction_coefficient: float | None) -> None:
+    """Raise ValueError for a touchdown that moves the toe horizontally or a non-positive friction coefficient."""
     if abs(float(touchdown.gd[0])) > 1e-9:
         raise ValueError(f"touchdown toe x velocity must be 0 under the no-slip constraint, got {touchdown.gd[0]}")
     if friction_coefficient is not None and not friction_coefficient > 0:
         raise ValueError(f"friction_coefficient must be positive (or None for no slipping), got {friction_coefficient}")
-    system = _StanceSystem(chain, law, ground, touchdown, friction_coefficient, trunk_balance=trunk_balance)
-    y = np.concatenate([touchdown.g, touchdown.gd, np.zeros(law.n_states)])
+
+
+@dataclass
+class _StanceEvents:
+    """The ``solve_ivp`` events that end a stance phase (each terminal; module docstring).
+
+    ``lift_off``: the law's ground force reaches zero while rising; ``leaves_surface``: the toe
+    crosses z = 0 upward; ``collapse``: the COM falls below the collapse height above the toe;
+    ``overflexion``: a joint leaves the anatomical range (:data:`MAX_JOINT_EXCURSION_RAD`);
+    ``slips``: while sticking, the friction cone is left (|Fx| > mu Fz); ``sticks``: while sliding,
+    the toe stops. The first two ignore the first :data:`MIN_STANCE_S` (a bounce, not a stance).
+    """
+
+    lift_off: Callable
+    leaves_surface: Callable
+    collapse: Callable
+    overflexion: Callable
+    slips: Callable
+    sticks: Callable
+
+    def for_phase(self, sign: int, friction: bool) -> list:
+        """Events of a phase, in the order :func:`_integrate_friction_phases` reads ``t_events``.
+
+        ``sign`` 0 = sticking (may slip), +1/-1 = sliding (may stick; the toe slides against the
+        friction force, so its x velocity has sign -sign).
+        """
+        events = [self.lift_off, self.leaves_surface, self.collapse, self.overflexion]
+        if friction:
+            self.sticks.direction = sign
+            events.append(self.slips if sign == 0 else self.sticks)
+        return events
+
+
+def _stance_events(system: _StanceSystem, collapse_height_m: float) -> _StanceEvents:
+    """The terminal events of one stance (:class:`_StanceEvents`) on the full ODE state."""
+    chain, ground, friction_coefficient = system.chain, system.ground, system.mu
 
     def lift_off(t, y):  # law force reaches zero while rising
         if t < MIN_STANCE_S:
@@ -346,46 +393,62 @@ def simulate_stance(
         event.terminal = True
     lift_off.direction, leaves_surface.direction, collapse.direction = -1, 1, -1
     overflexion.direction, slips.direction = -1, -1
+    return _StanceEvents(lift_off, leaves_surface, collapse, overflexion, slips, sticks)
+
+
+@dataclass
+class _PhasesRun:
+    """What :func:`_integrate_friction_phases` integrated: end time (s), end reason, dense output, solver steps."""
+
+    t_end_s: float
+    end_reason: str
+    dense: _PiecewiseDense
+    steps: list
+
+
+def _integrate_friction_phases(system: _StanceSystem, events: _StanceEvents, y: np.ndarray, t_max_s: float,
+                               rtol: float, atol: float) -> _PhasesRun:
+    """Integrate stick and slide phases in turn until take-off, collapse or ``t_max_s``.
+
+    Each phase is one :func:`_integrate_phase` on the coordinates free in it (:class:`_PhaseState`);
+    a phase ended by ``slips`` starts a slide against the friction force's direction, one ended by
+    ``sticks`` sticks again (toe x velocity set to 0). ``system.phases`` records the switches.
+    Raises RuntimeError after :data:`MAX_FRICTION_PHASES` phases (chatter) or a failed integration.
+    """
     dense = _PiecewiseDense()
     steps = []
-    t0, sign, end = 0.0, 0, "t_max"
+    t0, sign = 0.0, 0
     for _ in range(MAX_FRICTION_PHASES):
-        events = [lift_off, leaves_surface, collapse, overflexion]
-        if friction_coefficient is not None:
-            sticks.direction = sign  # the toe slides against the friction force: x velocity has sign -sign
-            events.append(slips if sign == 0 else sticks)
+        phase_events = events.for_phase(sign, system.mu is not None)
         phase = _PhaseState(sign, y.size, float(y[0]))
         sol = _integrate_phase(phase.rhs(system.rhs_for(sign)), (t0, t_max_s), phase.reduce(y),
-                               [phase.wrap(e) for e in events], rtol, atol)
+                               [phase.wrap(e) for e in phase_events], rtol, atol)
         if sol.status == -1:
             raise RuntimeError(f"stance integration failed: {sol.message}")
         dense.append(float(sol.t[-1]), sol.sol, phase)
         steps.append(sol.t)
         t0, y = float(sol.t[-1]), phase.expand(sol.y[:, -1])
         if len(sol.t_events[2]) or len(sol.t_events[3]):
-            end = "collapse"
-            break
+            return _PhasesRun(t0, "collapse", dense, steps)
         if len(sol.t_events[0]) or len(sol.t_events[1]):
-            end = "take_off"
-            break
+            return _PhasesRun(t0, "take_off", dense, steps)
         if sol.status != 1:  # reached t_max
-            break
+            return _PhasesRun(t0, "t_max", dense, steps)
         if sign == 0:  # slips: slide against the friction force's direction
             _, _, _, force, *_ = system.evaluate(t0, y, 0)
             sign = 1 if force[0] > 0 else -1
         else:  # stops sliding: stick again
             sign, y[6] = 0, 0.0
         system.phases.append((t0, sign))
-    else:
-        raise RuntimeError(f"stance integration: more than {MAX_FRICTION_PHASES} stick/slip phases")
-    t_end = t0
+    raise RuntimeError(f"stance integration: more than {MAX_FRICTION_PHASES} stick/slip phases")
+
+
+def _report_times(steps: list, sample_times_s: np.ndarray | None, t_end_s: float) -> np.ndarray:
+    """Times since touchdown to report: the solver's own steps, or ``sample_times_s`` within [0, t_end_s]."""
     if sample_times_s is None:
-        times = np.unique(np.concatenate(steps))
-    else:
-        times = np.asarray(sample_times_s, float)
-        times = times[(times >= 0) & (times <= t_end)]
-    ys = dense(times).T if len(times) else np.zeros((0, len(y)))
-    return _collect(system, times, ys, end, dense)
+        return np.unique(np.concatenate(steps))
+    times = np.asarray(sample_times_s, float)
+    return times[(times >= 0) & (times <= t_end_s)]
 
 
 def _integrate_phase(rhs, span: tuple[float, float], y0: np.ndarray, events: list, rtol: float, atol: float):
