@@ -48,7 +48,7 @@ Touchdown and hop sequencing
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from scipy.interpolate import BPoly
@@ -332,7 +332,7 @@ class HoppingTrial:
     stances: list[StanceRecord]
     flights: list[Flight]
     t_end_s: float
-    calibration: dict
+    calibration: HopCalibration | None
     stop_reason: str = ""
     notes: list[str] = field(default_factory=list)
 
@@ -408,70 +408,166 @@ def flight_segment_rates(chain: Chain, law: ImpedanceLaw, stance: StanceSimulati
 CALIBRATION_FLIGHT_ROUNDS = 3
 
 
-def calibrate(chain: Chain, config: HoppingConfig, q_td: np.ndarray, speed_guess: float | None = None) -> dict:
-    """Touchdown speed, segment rates and push-off scale for a periodic hop at ``config.freq_hz``.
+@dataclass(frozen=True)
+class HopCalibration:
+    """The periodic hop :func:`calibrate` found (all SI).
 
-    For fixed touchdown segment rates, solves ``next touchdown speed = touchdown speed`` and
-    ``stance + flight = 1 / freq`` in the least-squares sense
-    (``scipy.optimize.least_squares``, bounded: speed 0.2-3 m/s, scale 0-20);
-    without a push-off part only the period equation (touchdown speed only). The touchdown rates
-    start at zero and are then replaced ``CALIBRATION_FLIGHT_ROUNDS - 1`` times by the rates the
-    energy-keeping flight (:func:`flight_segment_rates`) gives after the calibrated stance, so the
-    first hop starts near the periodic hop's own touchdown motion.
-    ``success`` is False when the best compromise misses the speed by more than
-    0.01 m/s or the period by more than 5 ms (e.g. a frequency that the law
-    cannot reach); the caller then reports the achieved values.
-
-    Returns
-    -------
-    dict with ``speed_m_s``, ``push_scale``, ``stance_s``, ``flight_s``,
-    ``d_speed_d_scale`` (controller gain basis), ``success``, ``com_ahead_m``,
-    ``touchdown_rate_q1_rad_s`` .. ``q4`` (segment rates at touchdown).
+    Attributes
+    ----------
+    speed_m_s : float
+        Touchdown COM vertical speed (m/s, positive down).
+    push_scale : float
+        Push-off amplitude scale (1 when the law has no push-off part).
+    stance_s, flight_s : float
+        Stance and flight of the calibrated hop (s).
+    next_speed_m_s : float
+        Touchdown speed after the calibrated hop (m/s); ``speed_m_s`` for an exactly periodic hop.
+    d_speed_d_scale : float
+        Next touchdown speed per unit push-off scale (m/s; the hop-by-hop controller's gain basis;
+        0 without a push-off part).
+    success : bool
+        False when the best compromise misses the speed by more than 0.01 m/s or the period by more
+        than 5 ms (e.g. a frequency that the law cannot reach).
+    com_ahead_m : float
+        COM ahead of the toe at touchdown that makes the take-off vx zero (m; clipped to 5 cm about
+        ``HoppingConfig.com_ahead_m``).
+    take_off_vx_m_s : float
+        Take-off horizontal COM velocity with the COM ``HoppingConfig.com_ahead_m`` ahead (m/s).
+    d_vx_d_com_ahead_s : float
+        Its change per metre of COM offset (1/s).
+    touchdown_rates_rad_s : ndarray, shape (4,)
+        Segment rates at touchdown (rad/s; zero unless the energy-keeping flight is calibrated).
     """
-    period = 1.0 / config.freq_hz
-    has_push = push_off_part(config.law) is not None
 
-    def stance(speed: float, scale: float, q: np.ndarray, rates: np.ndarray | None):
+    speed_m_s: float
+    push_scale: float
+    stance_s: float
+    flight_s: float
+    next_speed_m_s: float
+    d_speed_d_scale: float
+    success: bool
+    com_ahead_m: float
+    take_off_vx_m_s: float
+    d_vx_d_com_ahead_s: float
+    touchdown_rates_rad_s: np.ndarray
+
+    def to_dict(self) -> dict:
+        """Plain numbers for the truth file; the rates as ``touchdown_rate_q1_rad_s`` .. ``q4``."""
+        out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "touchdown_rates_rad_s"}
+        return {**out, **{f"touchdown_rate_q{k + 1}_rad_s": float(r) for k, r in enumerate(self.touchdown_rates_rad_s)}}
+
+
+@dataclass(frozen=True)
+class _CalibrationHop:
+    """One hop of the calibration from the touchdown posture ``q_td``: stance at 100 x the trial's tolerances."""
+
+    chain: Chain
+    config: HoppingConfig
+    q_td: np.ndarray
+
+    def stance(self, speed: float, scale: float, q: np.ndarray, rates: np.ndarray | None):
+        """(law with the push-off scaled, stance) from posture ``q`` at touchdown speed ``speed`` (m/s).
+
+        Raises ValueError if the stance does not end in take-off.
+        """
+        config, period = self.config, 1.0 / self.config.freq_hz
         law = scale_push_off(config.law, scale)
-        td = touchdown_state(chain, q, np.array([0.0, -speed]), 0.0, rates)
-        st = simulate_stance(chain, law, config.surface, td, t_max_s=2.0 * period,
+        td = touchdown_state(self.chain, q, np.array([0.0, -speed]), 0.0, rates)
+        st = simulate_stance(self.chain, law, config.surface, td, t_max_s=2.0 * period,
                              rtol=config.rtol * 100, atol=config.atol * 100,
                              friction_coefficient=config.friction_coefficient, trunk_balance=config.trunk_balance)
         if st.end_reason != "take_off":
             raise ValueError(f"calibration stance ended by {st.end_reason} at speed {speed:.2f} m/s")
         return law, st
 
-    def run(speed: float, scale: float, rates: np.ndarray | None, q: np.ndarray = q_td):
-        _, st = stance(speed, scale, q, rates)
-        t_f, v_next = _next_touchdown_speed(chain, st, q)
+    def run(self, speed: float, scale: float, rates: np.ndarray | None) -> tuple[float, float, float]:
+        """(stance s, flight s, next touchdown speed m/s) of the hop from ``q_td``."""
+        _, st = self.stance(speed, scale, self.q_td, rates)
+        t_f, v_next = _next_touchdown_speed(self.chain, st, self.q_td)
         return st.duration_s, t_f, v_next
 
-    def solve(rates: np.ndarray | None, guess: list[float]) -> tuple[float, float]:
-        def residual(x):
-            try:
-                ts, tf, v_next = run(x[0], x[1] if has_push else 1.0, rates)
-            except ValueError:
-                return [1.0, 1.0] if has_push else [1.0]
-            period_error = (ts + tf - period) * 5.0  # 1 ms of period weighs like 5 mm/s of speed
-            return [v_next - x[0], period_error] if has_push else [period_error]
 
-        if has_push:
-            sol = least_squares(residual, guess, bounds=([0.2, 0.0], [3.0, 20.0]),
-                                diff_step=1e-3, xtol=1e-8, ftol=1e-10)
-            return float(sol.x[0]), float(sol.x[1])
-        sol = least_squares(residual, guess[:1], bounds=([0.2], [3.0]), diff_step=1e-3, xtol=1e-8)
-        return float(sol.x[0]), 1.0
+def calibrate(chain: Chain, config: HoppingConfig, q_td: np.ndarray, speed_guess: float | None = None) -> HopCalibration:
+    """Touchdown speed, segment rates and push-off scale for a periodic hop at ``config.freq_hz``.
 
+    For fixed touchdown segment rates, solves ``next touchdown speed = touchdown speed`` and
+    ``stance + flight = 1 / freq`` in the least-squares sense (:func:`_solve_periodic_hop`);
+    without a push-off part only the period equation (touchdown speed only). The touchdown rates
+    start at zero and are then replaced ``CALIBRATION_FLIGHT_ROUNDS - 1`` times by the rates the
+    energy-keeping flight (:func:`flight_segment_rates`) gives after the calibrated stance, so the
+    first hop starts near the periodic hop's own touchdown motion (:func:`_calibrate_touchdown_rates`).
+    ``success`` is False when the best compromise misses the speed by more than
+    0.01 m/s or the period by more than 5 ms (e.g. a frequency that the law
+    cannot reach); the caller then reports the achieved values. The COM offset at touchdown
+    comes from :func:`_balanced_com_ahead`. Returns a :class:`HopCalibration`.
+    """
+    period = 1.0 / config.freq_hz
+    has_push = push_off_part(config.law) is not None
+    hop = _CalibrationHop(chain, config, q_td)
     speed = chain.gravity_m_s2 * 0.4 * period / 2.0 if speed_guess is None else speed_guess
+    speed, scale, rates = _calibrate_touchdown_rates(hop, has_push, speed)
+    ts, tf, v1 = hop.run(speed, scale, rates)
+    slope = 0.0
+    if has_push:
+        _, _, v2 = hop.run(speed, scale + 0.1, rates)
+        slope = (v2 - v1) / 0.1
+    success = abs(v1 - speed) < 0.01 if has_push else True
+    success = success and abs(ts + tf - period) < 0.005
+    base = config.com_ahead_m
+    com_ahead, vx0, vx1 = _balanced_com_ahead(hop, speed, scale, rates)
+    rates_out = np.zeros(4) if rates is None else rates
+    return HopCalibration(
+        speed_m_s=speed, push_scale=scale, stance_s=ts, flight_s=tf, next_speed_m_s=v1, d_speed_d_scale=slope,
+        success=bool(success), com_ahead_m=float(np.clip(com_ahead, base - 0.05, base + 0.05)),
+        take_off_vx_m_s=float(vx0), d_vx_d_com_ahead_s=float((vx1 - vx0) / 0.01),
+        touchdown_rates_rad_s=np.array([float(rates_out[k]) for k in range(4)]))
+
+
+def _solve_periodic_hop(hop: _CalibrationHop, has_push: bool, rates: np.ndarray | None,
+                        guess: list[float]) -> tuple[float, float]:
+    """(touchdown speed m/s, push-off scale) of the periodic hop for fixed touchdown ``rates``.
+
+    ``scipy.optimize.least_squares``, bounded (speed 0.2-3 m/s, scale 0-20), on ``next speed -
+    speed`` and the period error; without a push-off part the period error alone (scale 1). A
+    touchdown speed whose stance does not take off scores 1 on every residual.
+    """
+    period = 1.0 / hop.config.freq_hz
+
+    def residual(x):
+        try:
+            ts, tf, v_next = hop.run(x[0], x[1] if has_push else 1.0, rates)
+        except ValueError:
+            return [1.0, 1.0] if has_push else [1.0]
+        period_error = (ts + tf - period) * 5.0  # 1 ms of period weighs like 5 mm/s of speed
+        return [v_next - x[0], period_error] if has_push else [period_error]
+
+    if has_push:
+        sol = least_squares(residual, guess, bounds=([0.2, 0.0], [3.0, 20.0]),
+                            diff_step=1e-3, xtol=1e-8, ftol=1e-10)
+        return float(sol.x[0]), float(sol.x[1])
+    sol = least_squares(residual, guess[:1], bounds=([0.2], [3.0]), diff_step=1e-3, xtol=1e-8)
+    return float(sol.x[0]), 1.0
+
+
+def _calibrate_touchdown_rates(hop: _CalibrationHop, has_push: bool,
+                               speed: float) -> tuple[float, float, np.ndarray | None]:
+    """(speed m/s, push-off scale, touchdown rates rad/s or None) after the calibration's rounds.
+
+    One round (:func:`_solve_periodic_hop` with zero rates) for the prescribed flight;
+    :data:`CALIBRATION_FLIGHT_ROUNDS` for the energy-keeping one, each next round's rates those the
+    energy-keeping flight gives after this round's stance. A round whose solution does not hop ends
+    the rounds; the last round whose solution hops is kept.
+    """
+    chain, q_td = hop.chain, hop.q_td
     scale, rates = 1.0, None
-    rounds = CALIBRATION_FLIGHT_ROUNDS if config.flight == "energy_keeping" else 1
+    rounds = CALIBRATION_FLIGHT_ROUNDS if hop.config.flight == "energy_keeping" else 1
     accepted = None  # (speed, scale, rates) of the last round whose solution hops
     for round_ in range(rounds):
-        speed, scale = solve(rates, [speed, scale])
+        speed, scale = _solve_periodic_hop(hop, has_push, rates, [speed, scale])
         if rounds == 1:
             break
         try:
-            law, st = stance(speed, scale, q_td, rates)
+            law, st = hop.stance(speed, scale, q_td, rates)
             _next_touchdown_speed(chain, st, q_td)
         except ValueError:
             break  # this round's rates lead to no hop: keep the previous round's solution
@@ -480,34 +576,30 @@ def calibrate(chain: Chain, config: HoppingConfig, q_td: np.ndarray, speed_guess
             rates = flight_segment_rates(chain, law, st, q_td, 0.0)[0]
     if accepted is not None:
         speed, scale, rates = accepted
-    ts, tf, v1 = run(speed, scale, rates)
-    slope = 0.0
-    if has_push:
-        _, _, v2 = run(speed, scale + 0.1, rates)
-        slope = (v2 - v1) / 0.1
-    success = abs(v1 - speed) < 0.01 if has_push else True
-    success = success and abs(ts + tf - period) < 0.005
-    # Horizontal balance: the COM offset at touchdown that makes the take-off vx zero (secant, linear).
-    rho_td = np.asarray(config.touchdown_rho_rad, float)
-    base = config.com_ahead_m
+    return speed, scale, rates
+
+
+def _balanced_com_ahead(hop: _CalibrationHop, speed: float, scale: float,
+                        rates: np.ndarray | None) -> tuple[float, float, float]:
+    """Horizontal balance: the COM offset at touchdown that makes the take-off vx zero (secant, linear).
+
+    Returns (offset m, unclipped; take-off vx at ``HoppingConfig.com_ahead_m``; at 1 cm more), m/s.
+    """
+    rho_td = np.asarray(hop.config.touchdown_rho_rad, float)
+    base = hop.config.com_ahead_m
 
     def take_off_vx(ahead: float) -> float:
-        _, st = stance(speed, scale, touchdown_posture(chain, rho_td, ahead), rates)
-        return float(com_velocity(chain, st.g[-1], st.gd[-1])[0])
+        _, st = hop.stance(speed, scale, touchdown_posture(hop.chain, rho_td, ahead), rates)
+        return float(com_velocity(hop.chain, st.g[-1], st.gd[-1])[0])
 
     vx0, vx1 = take_off_vx(base), take_off_vx(base + 0.01)
     com_ahead = base - vx0 * 0.01 / (vx1 - vx0) if vx1 != vx0 else base
-    rates_out = np.zeros(4) if rates is None else rates
-    return {"speed_m_s": speed, "push_scale": scale, "stance_s": ts, "flight_s": tf,
-            "next_speed_m_s": v1, "d_speed_d_scale": slope, "success": bool(success),
-            "com_ahead_m": float(np.clip(com_ahead, base - 0.05, base + 0.05)),
-            "take_off_vx_m_s": float(vx0), "d_vx_d_com_ahead_s": float((vx1 - vx0) / 0.01),
-            **{f"touchdown_rate_q{k + 1}_rad_s": float(rates_out[k]) for k in range(4)}}
+    return com_ahead, vx0, vx1
 
 
-def calibrated_rates(calibration: dict) -> np.ndarray:
+def calibrated_rates(calibration: HopCalibration) -> np.ndarray:
     """Touchdown segment rates (rad/s, shape (4,)) stored by :func:`calibrate`."""
-    return np.array([calibration.get(f"touchdown_rate_q{k + 1}_rad_s", 0.0) for k in range(4)])
+    return np.array(calibration.touchdown_rates_rad_s, float)
 
 
 def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> HoppingTrial:
@@ -522,89 +614,134 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
     rng = np.random.default_rng(seed)
     rho_nom = np.asarray(config.touchdown_rho_rad, float)
     cal = calibrate(chain, config, touchdown_posture(chain, rho_nom, config.com_ahead_m))
-    notes = []
-    if not cal["success"]:
-        notes.append(
-            f"no exactly periodic hop at {config.freq_hz} Hz on {config.surface.name}: best compromise "
-            f"stance {cal['stance_s']:.3f} s + flight {cal['flight_s']:.3f} s "
-            f"({1.0 / (cal['stance_s'] + cal['flight_s']):.2f} Hz), touchdown speed {cal['speed_m_s']:.2f} -> "
-            f"{cal['next_speed_m_s']:.2f} m/s"
-        )
-    gain = cal["d_speed_d_scale"]
+    notes = [] if cal.success else [_calibration_note(config, cal)]
     period = 1.0 / config.freq_hz
-    g_acc = chain.gravity_m_s2
-
-    def posture(i: int, vx: float, stance_s: float) -> np.ndarray:
-        """Next touchdown posture: nominal + noise, COM placed for horizontal balance (Raibert-style)."""
-        rho = rho_nom + (rng.normal(0.0, config.posture_sd_rad, 3) if i > 0 else 0.0)
-        ahead = cal["com_ahead_m"] - vx * (0.5 * stance_s + config.placement_gain_s)
-        return touchdown_posture(chain, rho, ahead)
-
-    q_td = touchdown_posture(chain, rho_nom, cal["com_ahead_m"])
-    rates = calibrated_rates(cal)
-    speed = cal["speed_m_s"]
+    q_td = touchdown_posture(chain, rho_nom, cal.com_ahead_m)
+    rates: np.ndarray | None = calibrated_rates(cal)
+    speed = cal.speed_m_s
     t_td = config.lead_in_s
-    # Lead-in flight: COM falling onto the first touchdown; the segments start at rest and reach the
-    # calibrated touchdown rates (half the lead-in's worth of motion before touchdown).
-    com_td = body_com(chain, np.r_[0.0, 0.0, q_td])
-    com0 = com_td + np.array([0.0, speed * config.lead_in_s - 0.5 * g_acc * config.lead_in_s**2])
-    vel0 = np.array([0.0, -speed + g_acc * config.lead_in_s])
-    start = [q_td - 0.5 * config.lead_in_s * rates, np.zeros(4), np.zeros(4)]
-    lead = BPoly.from_derivatives([0.0, config.lead_in_s], np.array([start, [q_td, rates, np.zeros(4)]]))
-    flights = [Flight(0.0, config.lead_in_s, com0, vel0, lead, g_acc)]
+    flights = [_lead_in_flight(chain, config, q_td, rates, speed)]
     stances: list[StanceRecord] = []
     x_toe, vx_com = 0.0, 0.0
     stop = ""
     t_end = config.lead_in_s
     for i in range(config.n_hops):
         surface = config.surface_for_hop(i)
-        target = cal["speed_m_s"] * (1.0 + rng.normal(0.0, config.speed_sd))
-        scale = cal["push_scale"]
-        if gain > 0:
-            scale += (target - speed) / gain
-        scale *= 1.0 + rng.normal(0.0, config.push_sd)
-        law = scale_push_off(config.law, scale)
+        law = scale_push_off(config.law, _hop_push_scale(config, cal, speed, rng))
         td = touchdown_state(chain, q_td, np.array([vx_com, -speed]), x_toe, rates)
         st = simulate_stance(chain, law, surface, td, t_max_s=2.0 * period, rtol=config.rtol, atol=config.atol,
                              friction_coefficient=config.friction_coefficient, trunk_balance=config.trunk_balance)
         stances.append(StanceRecord(i, t_td, st, surface, law, td))
         t_end = t_td + st.duration_s
-        if st.end_reason != "take_off":
-            stop = f"hop {i}: stance ended by {st.end_reason} at {st.duration_s:.3f} s"
+        stop = _stance_stop_reason(i, st)
+        if stop:
             break
-        if st.duration_s < MIN_HOP_STANCE_S:
-            stop = f"hop {i}: the foot bounced off after {st.duration_s * 1000:.0f} ms (joints too soft?)"
-            break
-        g_to, gd_to = st.g[-1], st.gd[-1]
-        com_to, v_to = body_com(chain, g_to), com_velocity(chain, g_to, gd_to)
-        q_next = posture(i + 1, float(v_to[0]), st.duration_s)
+        v_to = com_velocity(chain, st.g[-1], st.gd[-1])
+        q_next = _next_posture(chain, config, cal, rho_nom + rng.normal(0.0, config.posture_sd_rad, 3),
+                               float(v_to[0]), st.duration_s)
         try:
-            t_f = flight_time_s(chain, com_to[1], v_to[1], q_next)
+            nxt = _flight_to_next_touchdown(chain, config, law, st, q_next, t_end, last=i == config.n_hops - 1)
         except ValueError as exc:
             stop = f"hop {i}: {exc}"
             break
-        com_next = com_to + v_to * t_f - np.array([0.0, 0.5 * g_acc * t_f**2])
-        v_next = v_to - np.array([0.0, g_acc * t_f])
-        rates, not_placed = None, 0.0
-        if config.flight == "energy_keeping":
-            rates, _, not_placed = flight_segment_rates(chain, law, st, q_next, float(v_next[0]))
-        td_next = touchdown_state(chain, q_next, v_next, 0.0, rates)
-        angles = BPoly.from_derivatives(
-            [0.0, t_f],
-            np.array([[g_to[2:], gd_to[2:], st.gdd[-1, 2:]], [q_next, td_next.gd[2:], np.zeros(4)]]),
-        )
-        if not_placed > 1e-9:
-            notes.append(f"flight after hop {i}: {not_placed:.3f} J of segment energy could not be placed")
-        if i == config.n_hops - 1:
-            # The recording ends at the apex (or after 40 % of the flight if it never rises); the segments
-            # keep the pace of a whole flight, so the last take-off looks like every other one.
-            t_f = max(v_to[1] / g_acc, 0.4 * t_f)
-        flights.append(Flight(t_end, t_f, com_to, v_to, angles, g_acc))
-        x_toe = float(com_next[0] - body_com(chain, np.r_[0.0, 0.0, q_next])[0])
-        vx_com, speed, q_td = float(v_next[0]), float(-v_next[1]), q_next
-        t_td = t_end + t_f
+        if nxt.not_placed_j > 1e-9:
+            notes.append(f"flight after hop {i}: {nxt.not_placed_j:.3f} J of segment energy could not be placed")
+        flights.append(nxt.flight)
+        x_toe, vx_com, speed, q_td, rates = nxt.x_toe_m, nxt.com_vx_m_s, nxt.speed_m_s, q_next, nxt.rates
+        t_td = t_end + nxt.flight.duration_s
         t_end = t_td
     return HoppingTrial(config, chain, stances, flights, t_end, cal, stop, notes)
+
+
+def _calibration_note(config: HoppingConfig, cal: HopCalibration) -> str:
+    """The trial note when the calibration found no exactly periodic hop (its best compromise)."""
+    return (
+        f"no exactly periodic hop at {config.freq_hz} Hz on {config.surface.name}: best compromise "
+        f"stance {cal.stance_s:.3f} s + flight {cal.flight_s:.3f} s "
+        f"({1.0 / (cal.stance_s + cal.flight_s):.2f} Hz), touchdown speed {cal.speed_m_s:.2f} -> "
+        f"{cal.next_speed_m_s:.2f} m/s"
+    )
+
+
+def _lead_in_flight(chain: Chain, config: HoppingConfig, q_td: np.ndarray, rates: np.ndarray, speed: float) -> Flight:
+    """Lead-in flight: COM falling onto the first touchdown at ``speed`` (m/s); the segments start at rest and
+    reach the calibrated touchdown ``rates`` (half the lead-in's worth of motion before touchdown)."""
+    g_acc = chain.gravity_m_s2
+    com_td = body_com(chain, np.r_[0.0, 0.0, q_td])
+    com0 = com_td + np.array([0.0, speed * config.lead_in_s - 0.5 * g_acc * config.lead_in_s**2])
+    vel0 = np.array([0.0, -speed + g_acc * config.lead_in_s])
+    start = [q_td - 0.5 * config.lead_in_s * rates, np.zeros(4), np.zeros(4)]
+    lead = BPoly.from_derivatives([0.0, config.lead_in_s], np.array([start, [q_td, rates, np.zeros(4)]]))
+    return Flight(0.0, config.lead_in_s, com0, vel0, lead, g_acc)
+
+
+def _hop_push_scale(config: HoppingConfig, cal: HopCalibration, speed: float, rng: np.random.Generator) -> float:
+    """Push-off scale of a hop: the calibrated one, corrected by the proportional controller towards a seeded
+    target touchdown speed (``speed_sd``) and varied by ``push_sd``."""
+    gain = cal.d_speed_d_scale
+    target = cal.speed_m_s * (1.0 + rng.normal(0.0, config.speed_sd))
+    scale = cal.push_scale
+    if gain > 0:
+        scale += (target - speed) / gain
+    scale *= 1.0 + rng.normal(0.0, config.push_sd)
+    return scale
+
+
+def _stance_stop_reason(i: int, st: StanceSimulation) -> str:
+    """Why hop ``i``'s stance ends the trial ("" when it took off as a hop)."""
+    if st.end_reason != "take_off":
+        return f"hop {i}: stance ended by {st.end_reason} at {st.duration_s:.3f} s"
+    if st.duration_s < MIN_HOP_STANCE_S:
+        return f"hop {i}: the foot bounced off after {st.duration_s * 1000:.0f} ms (joints too soft?)"
+    return ""
+
+
+def _next_posture(chain: Chain, config: HoppingConfig, cal: HopCalibration, rho: np.ndarray, vx: float,
+                  stance_s: float) -> np.ndarray:
+    """Next touchdown posture: joint angles ``rho`` (nominal + noise), COM placed for horizontal balance
+    (Raibert-style: ``vx (stance/2 + placement_gain_s)`` behind the calibrated offset)."""
+    ahead = cal.com_ahead_m - vx * (0.5 * stance_s + config.placement_gain_s)
+    return touchdown_posture(chain, rho, ahead)
+
+
+@dataclass(frozen=True)
+class _NextTouchdown:
+    """The flight after a stance and the touchdown it leads to (:func:`_flight_to_next_touchdown`)."""
+
+    flight: Flight
+    x_toe_m: float
+    com_vx_m_s: float
+    speed_m_s: float
+    rates: np.ndarray | None
+    not_placed_j: float
+
+
+def _flight_to_next_touchdown(chain: Chain, config: HoppingConfig, law: ImpedanceLaw, st: StanceSimulation,
+                              q_next: np.ndarray, t_takeoff_s: float, last: bool) -> _NextTouchdown:
+    """Ballistic COM from take-off to the touchdown in posture ``q_next``; segment angles a quintic from the
+    take-off angles, rates and accelerations to the touchdown ones (module docstring: rates zero plus the toe
+    correction, or the energy-keeping ones). The ``last`` flight ends the recording at its apex (or after 40 %
+    of the flight if it never rises); its segments keep the pace of a whole flight, so the last take-off looks
+    like every other one. Raises ValueError if the take-off is too weak to fly (:func:`flight_time_s`)."""
+    g_acc = chain.gravity_m_s2
+    g_to, gd_to = st.g[-1], st.gd[-1]
+    com_to, v_to = body_com(chain, g_to), com_velocity(chain, g_to, gd_to)
+    t_f = flight_time_s(chain, com_to[1], v_to[1], q_next)
+    com_next = com_to + v_to * t_f - np.array([0.0, 0.5 * g_acc * t_f**2])
+    v_next = v_to - np.array([0.0, g_acc * t_f])
+    rates, not_placed = None, 0.0
+    if config.flight == "energy_keeping":
+        rates, _, not_placed = flight_segment_rates(chain, law, st, q_next, float(v_next[0]))
+    td_next = touchdown_state(chain, q_next, v_next, 0.0, rates)
+    angles = BPoly.from_derivatives(
+        [0.0, t_f],
+        np.array([[g_to[2:], gd_to[2:], st.gdd[-1, 2:]], [q_next, td_next.gd[2:], np.zeros(4)]]),
+    )
+    if last:
+        t_f = max(v_to[1] / g_acc, 0.4 * t_f)
+    x_toe = float(com_next[0] - body_com(chain, np.r_[0.0, 0.0, q_next])[0])
+    return _NextTouchdown(Flight(t_takeoff_s, t_f, com_to, v_to, angles, g_acc), x_toe, float(v_next[0]),
+                          float(-v_next[1]), rates, not_placed)
 
 
 def leg_stiffness_n_m(chain: Chain, stance: StanceSimulation) -> tuple[float, float, float]:

@@ -153,7 +153,8 @@ def trial_truth(
                                    "beyond" if cfg.friction_coefficient is not None
                                    else "no-slip kinematic constraint at the toe"),
         },
-        "calibration": {k: (bool(v) if isinstance(v, (bool, np.bool_)) else float(v)) for k, v in trial.calibration.items()},
+        "calibration": {k: (bool(v) if isinstance(v, (bool, np.bool_)) else float(v))
+                        for k, v in (trial.calibration.to_dict() if trial.calibration is not None else {}).items()},
         "recording": {"start_ns": sensors.start_ns, "duration_s": trial.t_end_s},
         "stop_reason": trial.stop_reason,
         "notes": list(trial.notes),

@@ -121,9 +121,9 @@ def test_seed_like_hopper_keeps_seed_001_directions_on_an_unexpected_hard_surfac
     chain, cfg = hopping_config(2.2, "soft", 1, Effects(time_activation=True), variability=False, **seed_like_options())
     q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
     cal = calibrate(chain, cfg, q)
-    assert cal["success"]
-    law = scale_push_off(cfg.law, cal["push_scale"])
-    td = touchdown_state(chain, q, np.array([0.0, -cal["speed_m_s"]]), 0.0)
+    assert cal.success
+    law = scale_push_off(cfg.law, cal.push_scale)
+    td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
     kw = {"friction_coefficient": cfg.friction_coefficient, "trunk_balance": cfg.trunk_balance}
     soft_stance, hard_stance = simulate_stance(chain, law, SOFT, td, **kw), simulate_stance(chain, law, HARD, td, **kw)
     soft, hard = leg_stiffness_n_m(chain, soft_stance), leg_stiffness_n_m(chain, hard_stance)

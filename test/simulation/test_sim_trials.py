@@ -38,7 +38,7 @@ def clean_recording():
 
 def test_hopping_holds_the_target_frequency_in_place(trial_22):
     assert trial_22.stop_reason == ""
-    assert trial_22.calibration["success"]
+    assert trial_22.calibration.success
     td = np.array([s.t_touchdown_s for s in trial_22.stances])
     assert len(td) == 4
     periods = np.diff(td)
@@ -93,9 +93,9 @@ def test_unexpected_hard_surface_lowers_leg_stiffness_as_in_seed_001():
     chain, cfg = hopping_config(2.2, "soft", 1, Effects(time_activation=True), variability=False)
     q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
     cal = calibrate(chain, cfg, q)
-    assert cal["success"]
-    law = scale_push_off(cfg.law, cal["push_scale"])
-    td = touchdown_state(chain, q, np.array([0.0, -cal["speed_m_s"]]), 0.0)
+    assert cal.success
+    law = scale_push_off(cfg.law, cal.push_scale)
+    td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
     soft_stance, hard_stance = simulate_stance(chain, law, SOFT, td), simulate_stance(chain, law, HARD, td)
     soft, hard = leg_stiffness_n_m(chain, soft_stance), leg_stiffness_n_m(chain, hard_stance)
     assert hard[0] < 0.97 * soft[0]  # lower leg stiffness ...
