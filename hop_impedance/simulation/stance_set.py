@@ -31,6 +31,7 @@ Model (documented simplifications)
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, replace
+from functools import partial
 
 import numpy as np
 from scipy.interpolate import BPoly
@@ -60,7 +61,7 @@ from hop_impedance.simulation.scenarios import (
     seed_stiffness,
 )
 from hop_impedance.simulation.sensors import SensorConfig, sample_recording
-from hop_impedance.simulation.stance import simulate_stance
+from hop_impedance.simulation.stance import TouchdownState, simulate_stance
 
 #: The rigid surface without the foot bounce (see module docstring).
 RIGID_NO_BOUNCE = GroundLaw("rigid", 1.0e8, 1.5, 1.0e9, 1.5)
@@ -199,21 +200,11 @@ def nominal_touchdown_speed(chain: Chain, law, ground: GroundLaw, rho_td, freq_h
 
 
 def simulate_stance_set_recording(
-    freq_hz: float = 2.2,
-    surfaces: tuple[str, ...] = ("rigid",),
-    n_hops: int = 8,
-    seed: int = 1,
+    freq_hz: float = 2.2, surfaces: tuple[str, ...] = ("rigid",), n_hops: int = 8, seed: int = 1,
     effects: Effects = Effects(angle_dependent_stiffness=False, damping=False, push_off=False),
-    sensors: SensorConfig = SensorConfig(),
-    *,
-    subject: Subject = SEED_SUBJECT,
-    touchdown_rho_rad=DEFAULT_TOUCHDOWN_RHO,
-    posture_sd_rad: float = 0.02,
-    speed_sd: float = 0.05,
-    push_sd: float = 0.05,
-    rtol: float = 1e-7,
-    sizes: EffectSizes | None = None,
-    redraws: int = 0,
+    sensors: SensorConfig = SensorConfig(), *, subject: Subject = SEED_SUBJECT, touchdown_rho_rad=DEFAULT_TOUCHDOWN_RHO,
+    posture_sd_rad: float = 0.02, speed_sd: float = 0.05, push_sd: float = 0.05, rtol: float = 1e-7,
+    sizes: EffectSizes | None = None, redraws: int = 0,
 ) -> tuple[Recording, dict]:
     """Recording of ``n_hops`` independently simulated stances (see module docstring).
 
@@ -239,8 +230,8 @@ def simulate_stance_set_recording(
     redraws : int
         A stance that does not take off (e.g. a soft, weakly activated body
         that collapses) is re-drawn with a new touchdown state up to this
-        many times per hop (default 0: raise at once). Re-drawn hops are
-        counted in ``truth["redrawn_hops"]``.
+        many times per hop, then ValueError (default 0: ValueError at once).
+        Re-drawn hops are counted in ``truth["redrawn_hops"]``.
 
     Returns
     -------
@@ -249,36 +240,68 @@ def simulate_stance_set_recording(
         ``effects``, ``law``, ``surfaces``, ``sensors``, and per stance
         ``touchdown_s``, ``takeoff_s``, ``surface``; ``sizes`` (or None) and
         ``redrawn_hops``.
-
-    Raises
-    ------
-    ValueError
-        If a stance does not end in take-off (after ``redraws`` re-draws).
     """
     if n_hops < 1:
         raise ValueError(f"n_hops must be at least 1, got {n_hops}")
     rng = np.random.default_rng(seed)
     chain = chain_from_body_model(body_model_from_stature(subject))
     laws = [ground_law(s) for s in surfaces]
+    law, speed_nom, ts_nom = _stance_set_law(chain, freq_hz, effects, sizes, laws[0], touchdown_rho_rad)
+    draw = partial(_draw_touchdown, chain, rng, touchdown_rho_rad, posture_sd_rad, speed_nom, speed_sd)
+    tds = [draw() for _ in range(n_hops)]
+    sims, redrawn = _simulate_hops(chain, law, laws, tds, draw, rng, push_sd, freq_hz, rtol, redraws)
+    trial = _joined_trial(chain, sims, tds, max(1.0 / freq_hz - ts_nom, 0.1),
+                          HoppingConfig(freq_hz, n_hops, laws[0], law, tuple(float(r) for r in touchdown_rho_rad)))
+    recording, _ = sample_recording(trial, sensors, subject, np.random.default_rng([seed, 1]))
+    truth = {"generator": "hop_impedance.simulation.stance_set", "seed": seed, "freq_hz": freq_hz,
+             "effects": effects.to_dict(), "law": law.to_dict(), "surfaces": list(surfaces), "sensors": sensors.to_dict(),
+             "sizes": sizes.to_dict() if sizes is not None else None, "redrawn_hops": redrawn,
+             "stances": [_stance_truth(r) for r in trial.stances]}
+    return recording, truth
+
+
+def _stance_truth(record: StanceRecord) -> dict:
+    """A stance of the truth document: touchdown and take-off (s since recording start), surface name."""
+    return {"touchdown_s": record.t_touchdown_s, "takeoff_s": record.t_takeoff_s, "surface": record.surface.name}
+
+
+def _stance_set_law(chain: Chain, freq_hz: float, effects: Effects, sizes: EffectSizes | None, ground: GroundLaw,
+                    rho_td) -> tuple[ImpedanceLaw, float, float]:
+    """(law, nominal touchdown speed m/s, nominal stance s) of a stance set on ``ground``.
+
+    Without ``sizes`` the simulator's magnitudes (:func:`build_law`), the push-off timed on the
+    nominal passive stance (onset 35 %, duration 60 %); with ``sizes`` :func:`sized_law`. The nominal
+    speed and stance are those of the law without its push-off (:func:`nominal_touchdown_speed`).
+    """
     if sizes is None:
         passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0)
-        speed_nom, ts_nom = nominal_touchdown_speed(chain, passive, laws[0], touchdown_rho_rad, freq_hz)
+        speed_nom, ts_nom = nominal_touchdown_speed(chain, passive, ground, rho_td, freq_hz)
         law = build_law(freq_hz, effects, 0.35 * ts_nom, 0.6 * ts_nom)
     else:
-        law, _ = sized_law(chain, freq_hz, effects, sizes, laws[0], touchdown_rho_rad)
+        law, _ = sized_law(chain, freq_hz, effects, sizes, ground, rho_td)
         passive = CompositeLaw(tuple(p for p in law.parts if not isinstance(p, PushOff)))
-        speed_nom, ts_nom = nominal_touchdown_speed(chain, passive, laws[0], touchdown_rho_rad, freq_hz)
-    flight_nom = max(1.0 / freq_hz - ts_nom, 0.1)
+        speed_nom, ts_nom = nominal_touchdown_speed(chain, passive, ground, rho_td, freq_hz)
+    return law, speed_nom, ts_nom
 
-    def draw_touchdown():
-        rho = np.asarray(touchdown_rho_rad, float) + rng.normal(0.0, posture_sd_rad, 3)
-        speed = speed_nom * (1.0 + rng.normal(0.0, speed_sd))
-        return touchdown_state(chain, touchdown_posture(chain, rho), np.array([0.0, -speed]), 0.0)
 
-    tds = [draw_touchdown() for _ in range(n_hops)]
+def _draw_touchdown(chain: Chain, rng: np.random.Generator, rho_td, posture_sd_rad: float, speed_nom: float,
+                    speed_sd: float) -> TouchdownState:
+    """A touchdown at the nominal posture and speed with seeded variability (joint angles rad, speed fraction)."""
+    rho = np.asarray(rho_td, float) + rng.normal(0.0, posture_sd_rad, 3)
+    speed = speed_nom * (1.0 + rng.normal(0.0, speed_sd))
+    return touchdown_state(chain, touchdown_posture(chain, rho), np.array([0.0, -speed]), 0.0)
+
+
+def _simulate_hops(chain: Chain, law: ImpedanceLaw, laws: list[GroundLaw], tds: list[TouchdownState], draw,
+                   rng: np.random.Generator, push_sd: float, freq_hz: float, rtol: float, redraws: int):
+    """Each hop's stance from its touchdown in ``tds``: push-off scaled by 1 + N(0, push_sd), surfaces cycled.
+
+    A stance that does not take off is re-drawn (``draw()``, replacing its entry of ``tds``) up to
+    ``redraws`` times, then ValueError. Returns ([(stance, surface, law)] per hop, re-drawn count).
+    """
     redrawn = 0
     sims = []
-    for i in range(n_hops):
+    for i in range(len(tds)):
         hop_law = scale_push_off(law, 1.0 + rng.normal(0.0, push_sd))
         ground = laws[i % len(laws)]
         for attempt in range(redraws + 1):
@@ -288,9 +311,17 @@ def simulate_stance_set_recording(
             if attempt == redraws:
                 raise ValueError(f"hop {i}: stance ended by {st.end_reason} after {st.duration_s:.3f} s"
                                  + (f" ({redraws} re-draws tried)" if redraws else ""))
-            tds[i] = draw_touchdown()
+            tds[i] = draw()
             redrawn += 1
         sims.append((st, ground, hop_law))
+    return sims, redrawn
+
+
+def _joined_trial(chain: Chain, sims: list, tds: list[TouchdownState], flight_s: float,
+                  config: HoppingConfig) -> HoppingTrial:
+    """The stances joined into a trial: a 0.4 s lead-in falling onto the first touchdown (segments at rest),
+    bridged flights of ``flight_s`` (:func:`_bridge`; the last one towards the first touchdown), and the
+    recording ending half a flight after the last take-off."""
     lead = 0.4
     rest = np.array([tds[0].g[2:], np.zeros(4), np.zeros(4)])
     c_td = body_com(chain, tds[0].g)
@@ -302,19 +333,8 @@ def simulate_stance_set_recording(
     for i, (st, ground, hop_law) in enumerate(sims):
         stances.append(StanceRecord(i, t_td, st, ground, hop_law, tds[i]))
         t_to = t_td + st.duration_s
-        nxt = tds[i + 1] if i + 1 < n_hops else tds[0]
-        flights.append(_bridge(chain, t_to, flight_nom, st.g[-1], st.gd[-1], st.gdd[-1], nxt.g, nxt.gd))
-        t_td = t_to + flight_nom
-    t_end = stances[-1].t_takeoff_s + 0.5 * flight_nom
-    config = HoppingConfig(freq_hz, n_hops, laws[0], law, tuple(float(r) for r in touchdown_rho_rad))
-    trial = HoppingTrial(config, chain, stances, flights, t_end, {})
-    recording, _ = sample_recording(trial, sensors, subject, np.random.default_rng([seed, 1]))
-    truth = {
-        "generator": "hop_impedance.simulation.stance_set",
-        "seed": seed, "freq_hz": freq_hz, "effects": effects.to_dict(), "law": law.to_dict(),
-        "surfaces": list(surfaces), "sensors": sensors.to_dict(),
-        "sizes": sizes.to_dict() if sizes is not None else None, "redrawn_hops": redrawn,
-        "stances": [{"touchdown_s": r.t_touchdown_s, "takeoff_s": r.t_takeoff_s, "surface": r.surface.name}
-                    for r in stances],
-    }
-    return recording, truth
+        nxt = tds[i + 1] if i + 1 < len(sims) else tds[0]
+        flights.append(_bridge(chain, t_to, flight_s, st.g[-1], st.gd[-1], st.gdd[-1], nxt.g, nxt.gd))
+        t_td = t_to + flight_s
+    t_end = stances[-1].t_takeoff_s + 0.5 * flight_s
+    return HoppingTrial(config, chain, stances, flights, t_end, None)
