@@ -22,24 +22,11 @@ from hop_impedance.simulation.truth import trial_truth, truth_path, write_truth
 
 
 def simulate_recording(
-    freq_hz: float = 2.2,
-    surface_name: str = "hard",
-    n_hops: int = 10,
-    seed: int = 1,
-    effects: Effects = Effects(),
-    sensors: SensorConfig = SensorConfig(),
-    *,
-    subject: Subject = SEED_SUBJECT,
-    touchdown_rho_rad=DEFAULT_TOUCHDOWN_RHO,
-    tuned_for: str | None = None,
-    unexpected_surface: str | None = None,
-    unexpected_hops: tuple[int, ...] = (),
-    variability: bool = True,
-    generator: dict | None = None,
-    trunk_balance: TrunkBalance | None = None,
-    flight: str = "prescribed",
-    contact_ahead_m: float = 0.0,
-    push_timing: tuple[float, float] = PUSH_OFF_TIMING,
+    freq_hz: float = 2.2, surface_name: str = "hard", n_hops: int = 10, seed: int = 1, effects: Effects = Effects(),
+    sensors: SensorConfig = SensorConfig(), *, subject: Subject = SEED_SUBJECT, touchdown_rho_rad=DEFAULT_TOUCHDOWN_RHO,
+    tuned_for: str | None = None, unexpected_surface: str | None = None, unexpected_hops: tuple[int, ...] = (),
+    variability: bool = True, generator: dict | None = None, trunk_balance: TrunkBalance | None = None,
+    flight: str = "prescribed", contact_ahead_m: float = 0.0, push_timing: tuple[float, float] = PUSH_OFF_TIMING,
 ) -> tuple[Recording, dict]:
     """Simulate a hopping trial and sample it as a contract recording.
 
@@ -84,13 +71,11 @@ def simulate_recording(
     """
     chain, config = hopping_config(
         freq_hz, surface_name, n_hops, effects, subject=subject, touchdown_rho_rad=touchdown_rho_rad,
-        unexpected_surface=unexpected_surface, unexpected_hops=unexpected_hops,
-        calibration_surface=tuned_for, variability=variability, trunk_balance=trunk_balance, flight=flight,
-        contact_ahead_m=contact_ahead_m, push_timing=push_timing,
-    )
+        unexpected_surface=unexpected_surface, unexpected_hops=unexpected_hops, calibration_surface=tuned_for,
+        variability=variability, trunk_balance=trunk_balance, flight=flight, contact_ahead_m=contact_ahead_m,
+        push_timing=push_timing)
     trial = simulate_hopping(chain, config, seed=seed)
-    rng = np.random.default_rng([seed, 1])
-    recording, sensor_truth = sample_recording(trial, sensors, subject, rng)
+    recording, sensor_truth = sample_recording(trial, sensors, subject, np.random.default_rng([seed, 1]))
     gen = {"seed": seed, "freq_hz": freq_hz, "surface": surface_name, "n_hops": n_hops,
            "tuned_for": tuned_for or surface_name, **(generator or {})}
     truth = trial_truth(trial, sensors, subject, body_model_from_stature(subject), effects.to_dict(), sensor_truth, gen)
