@@ -290,6 +290,10 @@ def _hermite(p0, v0, p1, v1, s, dur):
     return h00 * p0 + h10 * dur * v0 + h01 * p1 + h11 * dur * v1
 
 
+#: Approach flight before the first touchdown of a strict recording (s).
+LEAD_S = 0.15
+
+
 def strict_recording(cfg: StrictConfig) -> tuple[Recording, dict]:
     """Contract recording of ``cfg.hops`` strict hops and its truth.
 
@@ -302,29 +306,58 @@ def strict_recording(cfg: StrictConfig) -> tuple[Recording, dict]:
     """
     rng = np.random.default_rng(cfg.seed)
     body = perturbed_body(cfg.mass_kg, cfg.height_m, rng)
-    stances = [_stance(body, rng, cfg) for _ in range(cfg.hops)]
-    lead = 0.15
-    t, segments = lead, []
-    for k, st in enumerate(stances):
-        segments.append(("stance", t, t + 2 * st["half_s"], st))
-        t += 2 * st["half_s"]
-        nxt = stances[k + 1] if k + 1 < len(stances) else st
-        t_f = (st["v_com"] + nxt["v_com"]) / G
-        segments.append(("flight", t, t + t_f, (st, nxt)))
-        t += t_f
-    t_end = t
-    first = stances[0]
+    timeline = _Timeline.of([_stance(body, rng, cfg) for _ in range(cfg.hops)])
+    t_f, force, torque = _plate_series(timeline, cfg, rng)
+    t_m, pos = _marker_series(timeline, cfg, rng)
+    start_ns = 1_710_000_000_000_000_000 + int(cfg.seed) * 1_000_000_000
+    subject = Subject(f"strict{cfg.seed}", round(float(cfg.mass_kg), 1), round(float(cfg.height_m), 3))
+    rec = Recording(force=ForcePlateSeries(start_ns + np.round(t_f * 1e9).astype(np.int64), force, torque),
+                    markers=MarkerSeries(start_ns + np.round(t_m * 1e9).astype(np.int64), MARKER_NAMES, pos),
+                    subject=subject, source="hop_impedance.validation.strict_generator")
+    truth = {"effects": cfg.effects or ["none"], "generator": "strict_generator (sympy EOM, DOP853)",
+             "config": {k: getattr(cfg, k) for k in cfg.__dataclass_fields__},
+             "subject": {"mass_kg": body.mass.tolist(), "length_m": body.length.tolist(), "com": body.com.tolist(),
+                         "inertia_kg_m2": body.inertia.tolist()},
+             "per_hop": _per_hop_truth(timeline)}
+    return rec, truth
 
-    def state_at(time_s: float) -> tuple[np.ndarray, np.ndarray, float, float]:
+
+@dataclass(frozen=True)
+class _Timeline:
+    """The strict hops laid out in recording time: an approach of :data:`LEAD_S`, then stance, flight, ...
+
+    ``segments`` are ``(kind, t_start_s, t_end_s, payload)``: a stance's payload is its
+    :func:`_stance` dict, a flight's the (take-off, next touchdown) stance pair; the last flight
+    leads to the mirror of the last stance's own touchdown.
+    """
+
+    first: dict
+    segments: list
+    t_end_s: float
+
+    @classmethod
+    def of(cls, stances: list[dict]) -> "_Timeline":
+        """Each stance lasts twice its half; each flight lasts (take-off + next touchdown COM speed) / g."""
+        t, segments = LEAD_S, []
+        for k, st in enumerate(stances):
+            segments.append(("stance", t, t + 2 * st["half_s"], st))
+            t += 2 * st["half_s"]
+            nxt = stances[k + 1] if k + 1 < len(stances) else st
+            t_f = (st["v_com"] + nxt["v_com"]) / G
+            segments.append(("flight", t, t + t_f, (st, nxt)))
+            t += t_f
+        return cls(stances[0], segments, t)
+
+    def state_at(self, time_s: float) -> tuple[np.ndarray, np.ndarray, float, float]:
         """(q, qd, Fz, Fx) at a recording time."""
-        if time_s < lead:  # approach: the mirror of the first stance's take-off flight, ending at touchdown
-            q1, v1 = _stance_state(first, 0.0)
+        if time_s < LEAD_S:  # approach: the mirror of the first stance's take-off flight, ending at touchdown
+            q1, v1 = _stance_state(self.first, 0.0)
             q0, v0 = q1 * 1.0, -v1
             q0 = q0.copy()
             q0[0] = 0.0
-            s = (time_s - 0.0) / lead
-            return _hermite(q0 + np.r_[0.03, 0, 0, 0, 0], np.zeros(5), q1, v1, s, lead), np.zeros(5), 0.0, 0.0
-        for kind, t0, t1, payload in segments:
+            s = (time_s - 0.0) / LEAD_S
+            return _hermite(q0 + np.r_[0.03, 0, 0, 0, 0], np.zeros(5), q1, v1, s, LEAD_S), np.zeros(5), 0.0, 0.0
+        for kind, t0, t1, payload in self.segments:
             if time_s <= t1:
                 break
         if kind == "stance":
@@ -339,43 +372,49 @@ def strict_recording(cfg: StrictConfig) -> tuple[Recording, dict]:
         s = np.clip((time_s - t0) / dur, 0.0, 1.0)
         return _hermite(q0, v0, q1, v1, s, dur), np.zeros(5), 0.0, 0.0
 
-    t_f = np.arange(0.0, t_end, 1e-3)
+
+def _plate_series(timeline: _Timeline, cfg: StrictConfig, rng: np.random.Generator):
+    """1 kHz plate: (times s, force (N, 3) N, torque (N, 3) N m) with noise and ``cfg.force_offset_n`` on Fz.
+
+    The torque about y is the horizontal force's moment about the plate surface (toe below it: ``z_toe Fx``).
+    """
+    t_f = np.arange(0.0, timeline.t_end_s, 1e-3)
     fz = np.zeros_like(t_f)
     fx = np.zeros_like(t_f)
     toe_z = np.zeros_like(t_f)
     for i, tt in enumerate(t_f):
-        q, _, fz[i], fx[i] = state_at(tt)
+        q, _, fz[i], fx[i] = timeline.state_at(tt)
         toe_z[i] = q[0]
     force = np.stack([fx, np.zeros_like(fx), fz], axis=1) + rng.normal(0.0, cfg.force_noise_n, (len(t_f), 3))
     force[:, 2] += cfg.force_offset_n
     torque = np.stack([np.zeros_like(fx), np.minimum(toe_z, 0.0) * fx, np.zeros_like(fx)], axis=1)
     torque += rng.normal(0.0, cfg.torque_noise_nm, torque.shape)
+    return t_f, force, torque
+
+
+def _marker_series(timeline: _Timeline, cfg: StrictConfig, rng: np.random.Generator):
+    """100 Hz markers with a random sampling phase: (times s, positions (N, markers, 3) m), ``cfg.marker_latency_s`` late."""
     phase = rng.uniform(0.0, 0.01)
-    t_m = np.arange(phase, t_end, 0.01)
+    t_m = np.arange(phase, timeline.t_end_s, 0.01)
     pos = np.zeros((len(t_m), len(MARKER_NAMES), 3))
     pos[:, :, 1] = -0.1
-    pts_fn = first["model"].f_pts
+    pts_fn = timeline.first["model"].f_pts
     for i, tt in enumerate(t_m):
-        q = state_at(max(tt - cfg.marker_latency_s, 0.0))[0]
+        q = timeline.state_at(max(tt - cfg.marker_latency_s, 0.0))[0]
         pts = np.array([np.asarray(p, float).ravel() for p in pts_fn(q)])
         pos[i, :, 0], pos[i, :, 2] = pts[:, 0], pts[:, 1]
     pos += rng.normal(0.0, cfg.marker_noise_m, pos.shape)
-    start_ns = 1_710_000_000_000_000_000 + int(cfg.seed) * 1_000_000_000
-    subject = Subject(f"strict{cfg.seed}", round(float(cfg.mass_kg), 1), round(float(cfg.height_m), 3))
-    rec = Recording(force=ForcePlateSeries(start_ns + np.round(t_f * 1e9).astype(np.int64), force, torque),
-                    markers=MarkerSeries(start_ns + np.round(t_m * 1e9).astype(np.int64), MARKER_NAMES, pos),
-                    subject=subject, source="hop_impedance.validation.strict_generator")
+    return t_m, pos
+
+
+def _per_hop_truth(timeline: _Timeline) -> list[dict]:
+    """Per stance: touchdown/take-off (s), k0, k1, touchdown moments (N m, extensor), flexion at mid-stance (rad)."""
     per_hop = []
-    for kind, t0, t1, st in segments:
+    for kind, t0, t1, st in timeline.segments:
         if kind != "stance":
             continue
         q_td = _stance_state(st, 0.0)[0]
         per_hop.append({"t_td": t0, "t_to": t1, "k0": st["k0"].tolist(), "k1": st["k1"].tolist(),
                         "M_td": st["model"].moments(q_td[2:]).tolist(),
                         "flex_mid_rad": (FLEX_SIGN * (st["q_mid"][2:] - q_td[2:])).tolist()})
-    truth = {"effects": cfg.effects or ["none"], "generator": "strict_generator (sympy EOM, DOP853)",
-             "config": {k: getattr(cfg, k) for k in cfg.__dataclass_fields__},
-             "subject": {"mass_kg": body.mass.tolist(), "length_m": body.length.tolist(), "com": body.com.tolist(),
-                         "inertia_kg_m2": body.inertia.tolist()},
-             "per_hop": per_hop}
-    return rec, truth
+    return per_hop
