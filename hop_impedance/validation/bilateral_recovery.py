@@ -23,11 +23,14 @@ plate, stances, markers, half-leg segments, fits), not bilateral coordination.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
-from hop_impedance.validation.coefficient_recovery import LAW_TERMS, compare_with_law, simulate_law_trial
+from hop_impedance.validation.coefficient_recovery import (
+    compare_with_law,
+    law_fit_options,
+    record_law_trial,
+    simulate_law_trial,
+)
 
 #: Each leg's share of its trial's ground wrench (see the module docstring for why 0.5).
 SHARE = 0.5
@@ -42,19 +45,11 @@ def bilateral_from_trials(left, right, seed: int, noisy: bool = False):
     plates share stamps.
     """
     from hop_impedance.bilateral import BilateralRecording, sum_plates
-    from hop_impedance.biomech.body_model import body_model_from_stature
     from hop_impedance.recording import ForcePlateSeries, MarkerSeries, Recording
-    from hop_impedance.simulation.scenarios import SEED_SUBJECT, Effects
-    from hop_impedance.simulation.sensors import SensorConfig, noise_free, sample_recording
-    from hop_impedance.simulation.truth import trial_truth
 
-    sensors = SensorConfig() if noisy else noise_free(SensorConfig())
     recs, truths = {}, {}
     for k, (side, trial) in enumerate((("left", left), ("right", right))):
-        rec, sensor_truth = sample_recording(trial, sensors, SEED_SUBJECT, np.random.default_rng([seed, 1, k]))
-        recs[side] = rec
-        truths[side] = trial_truth(trial, sensors, SEED_SUBJECT, body_model_from_stature(SEED_SUBJECT),
-                                   Effects(push_off=False).to_dict(), sensor_truth, {})
+        recs[side], truths[side] = record_law_trial(trial, noisy, np.random.default_rng([seed, 1, k]))
     nf = min(len(r.force) for r in recs.values())
     nm = min(len(r.markers) for r in recs.values())
     for r in recs.values():
@@ -89,14 +84,12 @@ def recover_legs(freq_hz: dict[str, float], seed: int, *, n_hops: dict[str, int]
     """
     from hop_impedance.biomech.analysis import AnalysisOptions
     from hop_impedance.biomech.per_leg import analyze_legs, fit_legs
-    from hop_impedance.impedance.recording_fits import default_fit_options
 
     hops = n_hops if isinstance(n_hops, dict) else {side: n_hops for side in freq_hz}
     trials = {side: simulate_law_trial(f, seed, hops[side]) for side, f in freq_hz.items()}
     bilateral, truths, trial_recordings = bilateral_from_trials(trials["left"], trials["right"], seed, noisy)
     analyses = analyze_legs(bilateral, AnalysisOptions(marker_cutoff_hz=cutoff_hz, force_cutoff_hz=cutoff_hz), rigid)
-    options = replace(default_fit_options(analyses["left"].options), reduce=False, terms=LAW_TERMS,
-                      exclude_touchdown_s=edge_s, exclude_takeoff_s=edge_s)
+    options = law_fit_options(analyses["left"].options, edge_s)
     fits = fit_legs(analyses, options)
     results = {side: compare_with_law(analyses[side], fits[side], truths[side], law_scale=SHARE, skip_first=skip_first)
                for side in ("left", "right")}

@@ -131,32 +131,49 @@ def recover_trial(
         when the same trial is recorded twice).
     """
     from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording
-    from hop_impedance.biomech.body_model import body_model_from_stature
-    from hop_impedance.impedance.recording_fits import default_fit_options, fit_recording
+    from hop_impedance.impedance.recording_fits import fit_recording
     from hop_impedance.io.recording_io import load_recording
-    from hop_impedance.simulation.scenarios import SEED_SUBJECT, Effects
-    from hop_impedance.simulation.sensors import SensorConfig, noise_free, sample_recording
     from hop_impedance.simulation.simulate import write_simulated_recording
-    from hop_impedance.simulation.truth import trial_truth
 
-    effects = Effects(push_off=False)
     if trial is None:
         trial = simulate_law_trial(freq_hz, seed, n_hops)
-    sensors = SensorConfig() if noisy else noise_free(SensorConfig())
-    rec, sensor_truth = sample_recording(trial, sensors, SEED_SUBJECT, np.random.default_rng([seed, 1]))
-    truth = trial_truth(trial, sensors, SEED_SUBJECT, body_model_from_stature(SEED_SUBJECT), effects.to_dict(), sensor_truth, {})
+    rec, truth = record_law_trial(trial, noisy, np.random.default_rng([seed, 1]))
     path = Path(folder) / f"recovery_{freq_hz:.2f}hz_seed{seed}_{'noisy' if noisy else 'clean'}.mcap"
     write_simulated_recording(path, rec, truth)
     analysis = analyze_recording(load_recording(path), AnalysisOptions(marker_cutoff_hz=cutoff_hz, force_cutoff_hz=cutoff_hz))
-    options = replace(
-        default_fit_options(analysis.options), reduce=False, terms=LAW_TERMS, exclude_touchdown_s=edge_s, exclude_takeoff_s=edge_s
-    )
-    fits = fit_recording(analysis, options)
+    fits = fit_recording(analysis, law_fit_options(analysis.options, edge_s))
     result = compare_with_law(analysis, fits, truth, skip_first=skip_first)
     result.trial_medians.append(
         {j: np.median(result.error_array(j), axis=0) if result.errors[j] else np.full(2, np.nan) for j in JOINTS}
     )
     return result
+
+
+def record_law_trial(trial, noisy: bool, rng: np.random.Generator) -> tuple:
+    """(recording, truth) of a push-off-free law trial: its sensors sampled noise-free or with realistic noise.
+
+    The truth is :func:`~hop_impedance.simulation.truth.trial_truth` for the seed's mean subject with the
+    push-off switched off (``Effects(push_off=False)``, the law :func:`simulate_law_trial` uses).
+    """
+    from hop_impedance.biomech.body_model import body_model_from_stature
+    from hop_impedance.simulation.scenarios import SEED_SUBJECT, Effects
+    from hop_impedance.simulation.sensors import SensorConfig, noise_free, sample_recording
+    from hop_impedance.simulation.truth import trial_truth
+
+    sensors = SensorConfig() if noisy else noise_free(SensorConfig())
+    rec, sensor_truth = sample_recording(trial, sensors, SEED_SUBJECT, rng)
+    truth = trial_truth(trial, sensors, SEED_SUBJECT, body_model_from_stature(SEED_SUBJECT),
+                        Effects(push_off=False).to_dict(), sensor_truth, {})
+    return rec, truth
+
+
+def law_fit_options(analysis_options, edge_s: float):
+    """Fit options of the recovery: the law's structure given (:data:`LAW_TERMS`, no term elimination),
+    ``edge_s`` left out of the objective at each stance edge (``FitOptions.exclude_*``)."""
+    from hop_impedance.impedance.recording_fits import default_fit_options
+
+    return replace(default_fit_options(analysis_options), reduce=False, terms=LAW_TERMS, exclude_touchdown_s=edge_s,
+                   exclude_takeoff_s=edge_s)
 
 
 def compare_with_law(analysis, fits, truth: dict, *, skip_first: int = 0, law_scale: float = 1.0) -> RecoveryResult:
