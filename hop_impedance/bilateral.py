@@ -138,7 +138,8 @@ def save_bilateral(path: str | Path, bilateral: BilateralRecording, compression:
         write_recording_messages(writer, v1)
         for side, plate in bilateral.plates.items():
             for i, t in enumerate(plate.stamp_ns):
-                writer.write(PLATE_TOPICS[side], WRENCH_TYPE, _wrench_message(int(t), FORCE_FRAME_ID, plate.force_n[i], plate.torque_nm[i]), int(t))
+                message = _wrench_message(int(t), FORCE_FRAME_ID, plate.force_n[i], plate.torque_nm[i])
+                writer.write(PLATE_TOPICS[side], WRENCH_TYPE, message, int(t))
 
 
 def _wrench_message(stamp_ns: int, frame_id: str, force: np.ndarray, torque: np.ndarray) -> dict:
@@ -194,7 +195,8 @@ def load_bilateral(path: str | Path, **options) -> BilateralRecording:
         idx = order_by_stamp(s, PLATE_TOPICS[side], rec.warnings)
         s, v = s[idx], v[idx]
         if s.shape != rec.force.stamp_ns.shape or np.any(s != rec.force.stamp_ns):
-            raise ValueError(f"{path}: {PLATE_TOPICS[side]} stamps differ from {FORCE_TOPIC}'s; contract v2 publishes them together")
+            raise ValueError(f"{path}: {PLATE_TOPICS[side]} stamps differ from {FORCE_TOPIC}'s; "
+                             "contract v2 publishes them together")
         plates[side] = ForcePlateSeries(s, v[:, :3].copy(), v[:, 3:].copy())
     left = None
     if left_stamps and rec.markers is not None:

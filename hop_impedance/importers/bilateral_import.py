@@ -123,7 +123,8 @@ def _wrench_per_foot(
         side = min(SIDES, key=lambda s: abs(ankle_y[s] - mean_y))
         sums[side][0] += f
         sums[side][1] += m
-        notes.append(f"plate {p.name or '?'} -> {side} foot (mean centre of pressure y {mean_y:+.3f} m, ankle y {ankle_y[side]:+.3f} m)")
+        notes.append(f"plate {p.name or '?'} -> {side} foot (mean centre of pressure y {mean_y:+.3f} m, "
+                     f"ankle y {ankle_y[side]:+.3f} m)")
     for side in SIDES:
         if not np.any(sums[side][0][:, 2] > LOADED_N):
             notes.append(f"no plate carried the {side} foot: its wrench is zero (leg in the air or off the plates)")
