@@ -75,7 +75,6 @@ from hop_impedance.simulation.stance import (
     simulate_stance,
 )
 
-
 #: A contact shorter than this is a bounce of the foot, not a hop (s).
 MIN_HOP_STANCE_S = 0.05
 #: Flight models of :class:`HoppingConfig` (module docstring).

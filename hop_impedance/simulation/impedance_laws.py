@@ -213,7 +213,7 @@ class PushOff(ImpedanceLaw):
         shape = np.broadcast_shapes(np.shape(t_s), np.shape(rho)[:-1])
         return np.broadcast_to(self.profile(t_s)[..., None] * self.amplitude_nm, shape + (3,))
 
-    def with_amplitude(self, amplitude_nm) -> "PushOff":
+    def with_amplitude(self, amplitude_nm) -> PushOff:
         """Copy with another amplitude (N m, per joint)."""
         return PushOff(amplitude_nm, self.onset_s, self.duration_s)
 
@@ -257,7 +257,7 @@ class CompositeLaw(ImpedanceLaw):
         """First part of the given type, or None."""
         return next((p for p in self.parts if isinstance(p, kind)), None)
 
-    def replace_part(self, old: ImpedanceLaw, new: ImpedanceLaw) -> "CompositeLaw":
+    def replace_part(self, old: ImpedanceLaw, new: ImpedanceLaw) -> CompositeLaw:
         """Copy with ``old`` (by identity) swapped for ``new``."""
         return CompositeLaw(tuple(new if p is old else p for p in self.parts))
 

@@ -7,8 +7,8 @@ constraint force), toe z free on the surface law of
 of freedom plus the impedance law's extra states.
 
 Coulomb friction (``friction_coefficient`` mu; the hopping trials use
-``DEFAULT_FRICTION_COEFFICIENT`` = 0.8, rubber sole on a plate): the foot sticks while the constraint force satisfies |Fx| <= mu Fz
-(+ ``FRICTION_TOLERANCE_N``).
+``DEFAULT_FRICTION_COEFFICIENT`` = 0.8, rubber sole on a plate): the foot sticks while the constraint
+force satisfies |Fx| <= mu Fz (+ ``FRICTION_TOLERANCE_N``).
 When it would need more (in the last few milliseconds before take-off, where
 Fz falls to zero while the joint springs still push), the toe slides: x
 becomes free and the ground applies Fx = sign(Fx at slip) mu Fz, opposing the

@@ -38,9 +38,8 @@ from scipy.interpolate import BPoly
 
 from hop_impedance.biomech.body_model import body_model_from_stature
 from hop_impedance.recording import Recording, Subject
-from hop_impedance.simulation.dynamics import Chain, body_com, com_offset_jacobian, com_velocity, chain_from_body_model
+from hop_impedance.simulation.dynamics import Chain, body_com, chain_from_body_model, com_offset_jacobian, com_velocity
 from hop_impedance.simulation.ground import GroundLaw, surface
-from hop_impedance.simulation.impedance_laws import CompositeLaw, Eq3Law, ImpedanceLaw, PushOff, TimeActivation
 from hop_impedance.simulation.hopping_trial import (
     Flight,
     HoppingConfig,
@@ -50,10 +49,11 @@ from hop_impedance.simulation.hopping_trial import (
     touchdown_posture,
     touchdown_state,
 )
+from hop_impedance.simulation.impedance_laws import CompositeLaw, Eq3Law, ImpedanceLaw, PushOff, TimeActivation
 from hop_impedance.simulation.scenarios import (
     DEFAULT_TOUCHDOWN_RHO,
-    EXTRA_K2,
     EXTRA_B1,
+    EXTRA_K2,
     PUSH_OFF_WEIGHTS,
     SEED_SUBJECT,
     Effects,

@@ -53,7 +53,8 @@ def bilateral_from_trials(left, right, seed: int, noisy: bool = False):
     nf = min(len(r.force) for r in recs.values())
     nm = min(len(r.markers) for r in recs.values())
     for r in recs.values():
-        if np.any(r.force.stamp_ns[:nf] != recs["left"].force.stamp_ns[:nf]) or np.any(r.markers.stamp_ns[:nm] != recs["left"].markers.stamp_ns[:nm]):
+        if (np.any(r.force.stamp_ns[:nf] != recs["left"].force.stamp_ns[:nf])
+                or np.any(r.markers.stamp_ns[:nm] != recs["left"].markers.stamp_ns[:nm])):
             raise ValueError("the two trials are not sampled on the same clock")
     plates = {side: ForcePlateSeries(r.force.stamp_ns[:nf].copy(), SHARE * r.force.force_n[:nf], SHARE * r.force.torque_nm[:nf])
               for side, r in recs.items()}

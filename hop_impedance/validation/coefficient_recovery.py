@@ -60,7 +60,7 @@ class RecoveryResult:
     trial_medians: list = field(default_factory=list)
     simulated_stances: int = 0
 
-    def extend(self, other: "RecoveryResult") -> None:
+    def extend(self, other: RecoveryResult) -> None:
         """Pool another trial's stances into this result."""
         for joint in JOINTS:
             self.errors[joint] += other.errors[joint]

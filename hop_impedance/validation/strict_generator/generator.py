@@ -27,7 +27,7 @@ sampling phase), optional plate offset and marker latency.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -336,7 +336,7 @@ class _Timeline:
     t_end_s: float
 
     @classmethod
-    def of(cls, stances: list[dict]) -> "_Timeline":
+    def of(cls, stances: list[dict]) -> _Timeline:
         """Each stance lasts twice its half; each flight lasts (take-off + next touchdown COM speed) / g."""
         t, segments = LEAD_S, []
         for k, st in enumerate(stances):
@@ -357,9 +357,8 @@ class _Timeline:
             q0[0] = 0.0
             s = (time_s - 0.0) / LEAD_S
             return _hermite(q0 + np.r_[0.03, 0, 0, 0, 0], np.zeros(5), q1, v1, s, LEAD_S), np.zeros(5), 0.0, 0.0
-        for kind, t0, t1, payload in self.segments:
-            if time_s <= t1:
-                break
+        # the first segment not over at time_s (the last one after the recording end)
+        kind, t0, t1, payload = next((seg for seg in self.segments if time_s <= seg[2]), self.segments[-1])
         if kind == "stance":
             q, qd = _stance_state(payload, time_s - t0)
             model = payload["model"]
