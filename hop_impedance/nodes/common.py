@@ -19,6 +19,7 @@ topic                          type                                        publi
 
 from __future__ import annotations
 
+import functools
 import math
 import struct
 import time
@@ -120,6 +121,37 @@ def wrench_from_cdr(cdr: bytes) -> tuple[int, tuple[float, float, float, float, 
     pos += -(pos - 4) % 8
     values = (_WRENCH_LE if little else _WRENCH_BE).unpack_from(cdr, pos)
     return sec * 1_000_000_000 + nsec, values
+
+
+@functools.cache
+def check_wrench_layout() -> None:
+    """Fail loudly if :func:`wrench_from_cdr` does not read this installation's ``WrenchStamped`` (issue 20).
+
+    The hand-written parser assumes the message's layout; a changed message
+    definition or serialiser would otherwise give wrong forces silently. Once
+    per process, rclpy serialises a message with distinct values (a frame_id
+    whose length moves the padding) and the parser must read them all back.
+    """
+    from geometry_msgs.msg import WrenchStamped
+    from rclpy.serialization import serialize_message
+
+    msg = WrenchStamped()
+    msg.header.stamp.sec, msg.header.stamp.nanosec, msg.header.frame_id = 1_700_000_123, 456_789, "plate"
+    want = (1.5, -2.25, 3.125, -4.0625, 5.03125, -6.015625)
+    (msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z,
+     msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z) = want
+    got = wrench_from_cdr(serialize_message(msg))
+    if got != (1_700_000_123_000_456_789, want):
+        raise RuntimeError(f"geometry_msgs/WrenchStamped is not laid out as wrench_from_cdr reads it: wrote "
+                           f"{(1_700_000_123_000_456_789, want)}, read {got}; update nodes/common.py")
+
+
+def raw_wrench_subscription(node: Node, topic: str, callback, qos):
+    """Subscribe to a ``WrenchStamped`` topic as raw CDR bytes for :func:`wrench_from_cdr`, its layout checked first."""
+    from geometry_msgs.msg import WrenchStamped
+
+    check_wrench_layout()
+    return node.create_subscription(WrenchStamped, topic, callback, qos, raw=True)
 
 
 def set_stamp(stamp, ns: int) -> None:

@@ -54,7 +54,6 @@ import math
 import time
 
 import numpy as np
-from geometry_msgs.msg import WrenchStamped
 from hop_impedance_msgs.msg import JointKinetics, MarkerArray, StanceKinetics, SubjectInfo
 from rclpy.node import Node
 from std_msgs.msg import Header
@@ -75,6 +74,7 @@ from hop_impedance.nodes.common import (
     ReorderBuffer,
     declare,
     declare_stream_parameters,
+    raw_wrench_subscription,
     seconds_to_ns,
     set_stamp,
     stamp_ns,
@@ -132,7 +132,7 @@ class InverseDynamicsNode(Node):
         # per-frame JointKinetics go out from later timer ticks, after the StanceKinetics (common.DeferredPublisher)
         self.pub_frames = DeferredPublisher(self, JointKinetics, JOINT_KINETICS_TOPIC, result_qos(2000))
         self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
-        self.create_subscription(WrenchStamped, self.force_topic, self._on_wrench, input_qos(reliable), raw=True)
+        raw_wrench_subscription(self, self.force_topic, self._on_wrench, input_qos(reliable))
         self.create_subscription(MarkerArray, MARKER_TOPIC, self._on_markers, input_qos(reliable))
         self.create_subscription(Header, END_TOPIC, self._on_end, latched_qos())
         self.progress = ProgressReporter(self, self.trackers)

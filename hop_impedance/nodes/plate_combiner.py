@@ -57,6 +57,7 @@ from hop_impedance.nodes.common import (
     ReorderBuffer,
     declare,
     declare_stream_parameters,
+    raw_wrench_subscription,
     set_stamp,
     stamp_ns,
     wrench_from_cdr,
@@ -112,7 +113,7 @@ class PlateCombinerNode(Node):
         self.published = 0
         self.pub = self.create_publisher(WrenchStamped, self.output_topic, input_qos(reliable))
         for k, topic in enumerate(topics):
-            self.create_subscription(WrenchStamped, topic, self._callback(k), input_qos(reliable), raw=True)
+            raw_wrench_subscription(self, topic, self._callback(k), input_qos(reliable))
         self.create_subscription(Header, END_TOPIC, self._on_end, latched_qos())
         self.diagnostics = Diagnostics(self, diag, self._diag_values, self._diag_level)
         self._end: tuple[int, float] | None = None

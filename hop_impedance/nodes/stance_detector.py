@@ -27,7 +27,6 @@ import math
 import time
 
 import numpy as np
-from geometry_msgs.msg import WrenchStamped
 from hop_impedance_msgs.msg import StanceEvent, SubjectInfo
 from rclpy.node import Node
 from std_msgs.msg import Header
@@ -43,6 +42,7 @@ from hop_impedance.nodes.common import (
     ReorderBuffer,
     declare,
     declare_stream_parameters,
+    raw_wrench_subscription,
     seconds_to_ns,
     set_stamp,
     stamp_ns,
@@ -69,7 +69,7 @@ class StanceDetectorNode(Node):
         self._recent_t = np.zeros(0)
         self._recent_fz = np.zeros(0)
         self.pub = self.create_publisher(StanceEvent, EVENTS_TOPIC, result_qos())
-        self.create_subscription(WrenchStamped, FORCE_TOPIC, self._on_wrench, input_qos(reliable), raw=True)
+        raw_wrench_subscription(self, FORCE_TOPIC, self._on_wrench, input_qos(reliable))
         self.create_subscription(Header, END_TOPIC, self._on_end, latched_qos())
         self.create_subscription(SubjectInfo, SUBJECT_TOPIC, self._on_subject, latched_qos())
         self.progress = ProgressReporter(self, {FORCE_TOPIC: self.tracker})

@@ -32,3 +32,22 @@ def test_wrench_from_cdr_big_endian():
     body = struct.pack(">iII", 5, 6, 3) + b"fp\x00" + b"\x00" + struct.pack(">6d", 1, 2, 3, 4, 5, 6)
     ns, parsed = wrench_from_cdr(b"\x00\x00\x00\x00" + body)
     assert ns == 5_000_000_006 and parsed == (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
+
+
+def test_layout_check_at_start_up(monkeypatch):
+    """Issue 20: the nodes subscribe raw through ``raw_wrench_subscription``, which first checks the parser
+    against rclpy's serialisation of this installation's message: it passes here, and a parser that has the
+    layout wrong (no padding after frame_id) fails it loudly instead of reading wrong forces."""
+    import struct
+
+    from hop_impedance.nodes import common
+
+    common.check_wrench_layout.__wrapped__()  # this installation: no error
+
+    def unpadded(cdr: bytes):
+        sec, nsec, n = struct.unpack_from("<iII", cdr, 4)
+        return sec * 1_000_000_000 + nsec, struct.unpack_from("<6d", cdr, 16 + n)
+
+    monkeypatch.setattr(common, "wrench_from_cdr", unpadded)
+    with pytest.raises(RuntimeError, match="WrenchStamped is not laid out as wrench_from_cdr reads it"):
+        common.check_wrench_layout.__wrapped__()
