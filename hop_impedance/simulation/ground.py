@@ -12,7 +12,7 @@ from zero at touchdown instead of jumping by ``c |y'|``.
 Seed 001's laws: soft ``Fz = 7.5e4 |y|^1.4 - 68.4 y'`` and hard
 ``Fz = 3.1e6 |y|^2 - 186.3 y'`` (N, m, m/s).
 
-Choices (documented here, tested in ``test/simulation/test_ground.py``)
+Choices (documented here, tested in ``test/simulation/test_sim_laws.py`` and ``test_sim_dynamics.py``)
 ---------------------------------------------------------------------
 - The surface is massless and never pulls: contact ends (take-off) at the
   first instant the law's force reaches zero while the toe rises, even if the
