@@ -48,6 +48,7 @@ Touchdown and hop sequencing
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -79,6 +80,12 @@ from hop_impedance.simulation.stance import (
 MIN_HOP_STANCE_S = 0.05
 #: Flight models of :class:`HoppingConfig` (module docstring).
 FLIGHT_MODELS = ("prescribed", "energy_keeping")
+
+
+def joint_triple(values: Iterable[float]) -> tuple[float, float, float]:
+    """Three per-joint values (ankle, knee, hip) as floats, e.g. :attr:`HoppingConfig.touchdown_rho_rad`."""
+    ankle, knee, hip = (float(v) for v in values)
+    return ankle, knee, hip
 
 
 @dataclass(frozen=True)
@@ -161,7 +168,7 @@ def push_off_part(law: ImpedanceLaw) -> PushOff | None:
     if isinstance(law, PushOff):
         return law
     if isinstance(law, CompositeLaw):
-        return law.part(PushOff)  # type: ignore[return-value]
+        return law.part(PushOff)
     return None
 
 
@@ -171,7 +178,10 @@ def scale_push_off(law: ImpedanceLaw, scale: float) -> ImpedanceLaw:
     if part is None:
         return law
     new = part.with_amplitude(max(scale, 0.0) * part.amplitude_nm)
-    return new if law is part else law.replace_part(part, new)  # type: ignore[union-attr]
+    if law is part:
+        return new
+    assert isinstance(law, CompositeLaw)  # push_off_part found the part in a composite
+    return law.replace_part(part, new)
 
 
 def touchdown_posture(chain: Chain, rho_rad: np.ndarray, com_ahead_m: float = 0.0) -> np.ndarray:
@@ -560,7 +570,8 @@ def _calibrate_touchdown_rates(hop: _CalibrationHop, has_push: bool,
     chain, q_td = hop.chain, hop.q_td
     scale, rates = 1.0, None
     rounds = CALIBRATION_FLIGHT_ROUNDS if hop.config.flight == "energy_keeping" else 1
-    accepted = None  # (speed, scale, rates) of the last round whose solution hops
+    # (speed, scale, rates) of the last round whose solution hops
+    accepted: tuple[float, float, np.ndarray | None] | None = None
     for round_ in range(rounds):
         speed, scale = _solve_periodic_hop(hop, has_push, rates, [speed, scale])
         if rounds == 1:
@@ -616,10 +627,11 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
     notes = [] if cal.success else [_calibration_note(config, cal)]
     period = 1.0 / config.freq_hz
     q_td = touchdown_posture(chain, rho_nom, cal.com_ahead_m)
-    rates: np.ndarray | None = calibrated_rates(cal)
+    td_rates = calibrated_rates(cal)
+    rates: np.ndarray | None = td_rates
     speed = cal.speed_m_s
     t_td = config.lead_in_s
-    flights = [_lead_in_flight(chain, config, q_td, rates, speed)]
+    flights = [_lead_in_flight(chain, config, q_td, td_rates, speed)]
     stances: list[StanceRecord] = []
     x_toe, vx_com = 0.0, 0.0
     stop = ""

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 import numpy as np
 
@@ -44,6 +45,9 @@ class TouchdownReference:
 
     rho0_rad: np.ndarray
     omega0_rad_s: np.ndarray
+
+
+_LawT = TypeVar("_LawT", bound="ImpedanceLaw")
 
 
 class ImpedanceLaw(ABC):
@@ -253,7 +257,7 @@ class CompositeLaw(ImpedanceLaw):
     def elastic_energy_j(self, rho, ref):  # noqa: D102
         return sum(p.elastic_energy_j(rho, ref) for p in self.parts)
 
-    def part(self, kind: type) -> ImpedanceLaw | None:
+    def part(self, kind: type[_LawT]) -> _LawT | None:
         """First part of the given type, or None."""
         return next((p for p in self.parts if isinstance(p, kind)), None)
 

@@ -19,7 +19,7 @@ from hop_impedance.seed_tables import JOINTS as TABLE2_JOINTS
 from hop_impedance.seed_tables import TABLE2_EQ10
 from hop_impedance.simulation.dynamics import Chain, chain_from_body_model, contact_ahead_of_toe_marker
 from hop_impedance.simulation.ground import GroundLaw, surface
-from hop_impedance.simulation.hopping_trial import HoppingConfig, touchdown_posture, touchdown_state
+from hop_impedance.simulation.hopping_trial import HoppingConfig, joint_triple, touchdown_posture, touchdown_state
 from hop_impedance.simulation.impedance_laws import (
     CompositeLaw,
     Eq3Law,
@@ -35,7 +35,7 @@ SEED_SUBJECT = Subject("sim_seed_mean", 54.8, 1.63, "female")
 
 #: Seed Table 2, k0 and k1 (N m/rad) for ankle, knee, hip at 1.53, 1.87, 2.20 Hz.
 SEED_TABLE2: dict[float, dict[str, tuple[float, float, float]]] = {
-    f: {name: tuple(getattr(row[j], name) for j in TABLE2_JOINTS) for name in ("k0", "k1")}  # type: ignore[misc]
+    f: {name: tuple(getattr(row[j], name) for j in TABLE2_JOINTS) for name in ("k0", "k1")}
     for f, row in TABLE2_EQ10.items()
 }  # the seed's Table 2 means, typed once in hop_impedance/seed_tables.py
 
@@ -141,11 +141,11 @@ def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_durati
     k0, k1 = seed_stiffness(freq_hz)
     eq3 = Eq3Law(
         k0=k0,
-        k1=k1 if effects.angle_dependent_stiffness else 0.0,
-        k2=EXTRA_K2 if effects.quadratic_stiffness else 0.0,
-        k3=EXTRA_K3 if effects.rate_dependent_stiffness else 0.0,
-        b0=DAMPING_B0 if effects.damping else 0.0,
-        b1=EXTRA_B1 if effects.nonlinear_damping else 0.0,
+        k1=k1 if effects.angle_dependent_stiffness else np.zeros(3),
+        k2=np.array(EXTRA_K2 if effects.quadratic_stiffness else 0.0),
+        k3=np.array(EXTRA_K3 if effects.rate_dependent_stiffness else 0.0),
+        b0=np.array(DAMPING_B0 if effects.damping else 0.0),
+        b1=np.array(EXTRA_B1 if effects.nonlinear_damping else 0.0),
         activation=ACTIVATION if effects.time_activation else None,
     )
     if not effects.push_off:
@@ -203,7 +203,7 @@ def hopping_config(
         n_hops=n_hops,
         surface=expected,
         law=law,
-        touchdown_rho_rad=tuple(float(r) for r in touchdown_rho_rad),
+        touchdown_rho_rad=joint_triple(touchdown_rho_rad),
         unexpected_surface=surface(unexpected_surface) if unexpected_surface else None,
         unexpected_hops=tuple(unexpected_hops),
         posture_sd_rad=0.01 if variability else 0.0,

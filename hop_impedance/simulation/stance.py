@@ -38,6 +38,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from hop_impedance.biomech.joint_angles import joint_angles
+from hop_impedance.ode_events import TerminalEvent
 from hop_impedance.simulation.dynamics import (
     JOINT_JACOBIAN,
     Chain,
@@ -124,7 +125,7 @@ class StanceSimulation:
     law_states: np.ndarray
     end_reason: str
     ref: TouchdownReference
-    dense: object
+    dense: Callable[[np.ndarray], np.ndarray]
     friction_phases: tuple = ((0.0, 0),)
     friction_coefficient: float | None = None
     trunk_balance: TrunkBalance | None = None
@@ -190,6 +191,7 @@ class _StanceSystem:
             gdd, constraint = accelerations(self.chain, g, gd, moments, np.array([0.0, fz]), STANCE_FREE)
             fx = constraint[0]
         else:
+            assert self.mu is not None  # sliding phases exist only with friction (see _integrate_friction_phases)
             fx = sign * self.mu * fz
             gdd, _ = accelerations(self.chain, g, gd, moments, np.array([fx, fz]), SLIDE_FREE)
         rates = self.law.state_rates(np.float64(t), rho, omega, s, self.ref)
@@ -343,12 +345,12 @@ class _StanceEvents:
     the toe stops. The first two ignore the first :data:`MIN_STANCE_S` (a bounce, not a stance).
     """
 
-    lift_off: Callable
-    leaves_surface: Callable
-    collapse: Callable
-    overflexion: Callable
-    slips: Callable
-    sticks: Callable
+    lift_off: TerminalEvent
+    leaves_surface: TerminalEvent
+    collapse: TerminalEvent
+    overflexion: TerminalEvent
+    slips: TerminalEvent
+    sticks: TerminalEvent
 
     def for_phase(self, sign: int, friction: bool) -> list:
         """Events of a phase, in the order :func:`_integrate_friction_phases` reads ``t_events``.
@@ -389,11 +391,8 @@ def _stance_events(system: _StanceSystem, collapse_height_m: float) -> _StanceEv
     def sticks(t, y):  # sliding: the toe stops
         return y[6]
 
-    for event in (lift_off, leaves_surface, collapse, overflexion, slips, sticks):
-        event.terminal = True
-    lift_off.direction, leaves_surface.direction, collapse.direction = -1, 1, -1
-    overflexion.direction, slips.direction = -1, -1
-    return _StanceEvents(lift_off, leaves_surface, collapse, overflexion, slips, sticks)
+    return _StanceEvents(TerminalEvent(lift_off, -1), TerminalEvent(leaves_surface, 1), TerminalEvent(collapse, -1),
+                         TerminalEvent(overflexion, -1), TerminalEvent(slips, -1), TerminalEvent(sticks))
 
 
 @dataclass

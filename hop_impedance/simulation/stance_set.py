@@ -45,6 +45,7 @@ from hop_impedance.simulation.hopping_trial import (
     HoppingConfig,
     HoppingTrial,
     StanceRecord,
+    joint_triple,
     scale_push_off,
     touchdown_posture,
     touchdown_state,
@@ -117,7 +118,7 @@ def _nominal_passive_stance(chain: Chain, law: ImpedanceLaw, ground: GroundLaw, 
 
 
 def sized_law(chain: Chain, freq_hz: float, effects: Effects, sizes: EffectSizes, ground: GroundLaw,
-              rho_td=DEFAULT_TOUCHDOWN_RHO) -> tuple[ImpedanceLaw, float]:
+              rho_td=DEFAULT_TOUCHDOWN_RHO) -> tuple[CompositeLaw, float]:
     """The joint law of ``effects`` with the magnitudes of ``sizes``.
 
     ``k0``, ``k1`` come from seed Table 2 (interpolated in frequency), ``k2`` and
@@ -137,10 +138,10 @@ def sized_law(chain: Chain, freq_hz: float, effects: Effects, sizes: EffectSizes
     k0, k1 = seed_stiffness(freq_hz)
     eq3 = Eq3Law(
         k0=k0,
-        k1=k1 if effects.angle_dependent_stiffness else 0.0,
-        k2=EXTRA_K2 if effects.quadratic_stiffness else 0.0,
-        b0=sizes.damping_b0_nm_s_rad if effects.damping else 0.0,
-        b1=EXTRA_B1 if effects.nonlinear_damping else 0.0,
+        k1=k1 if effects.angle_dependent_stiffness else np.zeros(3),
+        k2=np.array(EXTRA_K2 if effects.quadratic_stiffness else 0.0),
+        b0=np.array(sizes.damping_b0_nm_s_rad if effects.damping else 0.0),
+        b1=np.array(EXTRA_B1 if effects.nonlinear_damping else 0.0),
         activation=TimeActivation(sizes.activation_a_min, sizes.activation_tau_s) if effects.time_activation else None,
     )
     nominal = _nominal_passive_stance(chain, eq3, ground, rho_td, freq_hz)
@@ -251,7 +252,7 @@ def simulate_stance_set_recording(
     tds = [draw() for _ in range(n_hops)]
     sims, redrawn = _simulate_hops(chain, law, laws, tds, draw, rng, push_sd, freq_hz, rtol, redraws)
     trial = _joined_trial(chain, sims, tds, max(1.0 / freq_hz - ts_nom, 0.1),
-                          HoppingConfig(freq_hz, n_hops, laws[0], law, tuple(float(r) for r in touchdown_rho_rad)))
+                          HoppingConfig(freq_hz, n_hops, laws[0], law, joint_triple(touchdown_rho_rad)))
     recording, _ = sample_recording(trial, sensors, subject, np.random.default_rng([seed, 1]))
     truth = {"generator": "hop_impedance.simulation.stance_set", "seed": seed, "freq_hz": freq_hz,
              "effects": effects.to_dict(), "law": law.to_dict(), "surfaces": list(surfaces), "sensors": sensors.to_dict(),

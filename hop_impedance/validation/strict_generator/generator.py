@@ -35,6 +35,7 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
+from hop_impedance.ode_events import TerminalEvent
 from hop_impedance.recording import MARKER_NAMES, ForcePlateSeries, MarkerSeries, Recording, Subject
 
 G = 9.81
@@ -262,9 +263,8 @@ def _stance(body: Body, rng: np.random.Generator, cfg: StrictConfig, tries: int 
         def takeoff(t, y):
             return y[0] if t > 1e-3 else -1.0
 
-        takeoff.terminal, takeoff.direction = True, 1
         sol = solve_ivp(model.rhs, (0.0, 0.4), np.r_[q_mid, np.zeros(5)], method="DOP853", rtol=1e-9,
-                        atol=1e-11, events=takeoff, dense_output=True)
+                        atol=1e-11, events=TerminalEvent(takeoff, 1), dense_output=True)
         if sol.status != 1:
             continue
         half = float(sol.t_events[0][0])
@@ -338,7 +338,8 @@ class _Timeline:
     @classmethod
     def of(cls, stances: list[dict]) -> _Timeline:
         """Each stance lasts twice its half; each flight lasts (take-off + next touchdown COM speed) / g."""
-        t, segments = LEAD_S, []
+        t = LEAD_S
+        segments: list[tuple[str, float, float, dict | tuple[dict, dict]]] = []
         for k, st in enumerate(stances):
             segments.append(("stance", t, t + 2 * st["half_s"], st))
             t += 2 * st["half_s"]
