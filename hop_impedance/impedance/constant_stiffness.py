@@ -81,7 +81,8 @@ def constant_stiffness_moment(angle_rad: np.ndarray, moment_nm: np.ndarray, stif
         ``tau[0] + K (rho - rho[0])``.
     """
     rho = np.asarray(angle_rad, float)
-    return float(moment_nm[0]) + stiffness_nm_rad * (rho - rho[0])
+    moment: np.ndarray = float(moment_nm[0]) + stiffness_nm_rad * (rho - rho[0])
+    return moment
 
 
 def table3_error(sse: float, n_samples: int, frame_rate_hz: float) -> float:

@@ -20,7 +20,10 @@ import numpy as np
 from scipy import optimize
 
 
-def _scaled(design: np.ndarray, target: np.ndarray, constraints: np.ndarray):
+def _scaled(
+    design: np.ndarray, target: np.ndarray, constraints: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """Unit-norm columns Xs, unit-norm target ys, unit-norm constraint rows in scaled coefficients, column norms, target norm."""
     X = np.asarray(design, float)
     y = np.asarray(target, float)
     col = np.linalg.norm(X, axis=0)
@@ -72,7 +75,8 @@ def fit_by_differential_evolution(
     result = optimize.differential_evolution(
         objective, bounds, constraints=cons, seed=seed, maxiter=maxiter, tol=1e-12, atol=0.0, polish=True
     )
-    return result.x * ynorm / col
+    theta: np.ndarray = result.x * ynorm / col  # scipy.optimize has no type information
+    return theta
 
 
 def fit_by_slsqp(design: np.ndarray, target: np.ndarray, constraints: np.ndarray) -> np.ndarray:
@@ -101,4 +105,5 @@ def fit_by_slsqp(design: np.ndarray, target: np.ndarray, constraints: np.ndarray
     )
     if not result.success:
         raise RuntimeError(f"SLSQP failed: {result.message}")
-    return result.x * ynorm / col
+    theta: np.ndarray = result.x * ynorm / col  # scipy.optimize has no type information
+    return theta

@@ -167,7 +167,8 @@ def _downdate_inverse(H: np.ndarray, j: int) -> np.ndarray:
     j first, because it only reads itself, row j and column j.
     """
     h = H[:, j]
-    return H - h[:, None] * (h / h[j])  # np.outer without its wrapper: the same products
+    downdated: np.ndarray = H - h[:, None] * (h / h[j])  # np.outer without its wrapper: the same products
+    return downdated
 
 
 class _OlsDowndate:
@@ -233,7 +234,8 @@ class _OlsDowndate:
         h = self.H.diagonal()[columns]
         if not well_conditioned(len(columns), float(h.sum()), min_ratio):
             return None
-        return h / self.norms[columns] ** 2
+        factors: np.ndarray = h / self.norms[columns] ** 2
+        return factors
 
 
 def _scale_columns(X: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -329,7 +331,8 @@ def _correlation_matrix(columns: np.ndarray) -> np.ndarray:
     """Correlation matrix of the columns (centred, unit-norm; a constant column gives a zero row), (p, p)."""
     Z = columns - columns.mean(axis=0)
     Z = Z / np.where(np.linalg.norm(Z, axis=0) > 0, np.linalg.norm(Z, axis=0), 1.0)
-    return Z.T @ Z
+    correlation: np.ndarray = Z.T @ Z
+    return correlation
 
 
 @dataclass(frozen=True)

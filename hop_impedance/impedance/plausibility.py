@@ -33,10 +33,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from hop_impedance.seed_tables import FREQUENCIES_HZ, SUBJECT_MASS_KG, eq10_k0_k1, nearest_frequency_hz
+
+if TYPE_CHECKING:
+    from hop_impedance.impedance.stance_fit import JointImpedanceFit
 
 #: Mean body mass of the seed's subjects (kg): "body mass 54.8 (SD, 4.8) kg" (:mod:`hop_impedance.seed_tables`).
 SEED_BODY_MASS_KG = SUBJECT_MASS_KG
@@ -67,7 +71,7 @@ def table2_band(
 
 def controller_rejection(
     joint: str,
-    fit,
+    fit: JointImpedanceFit,
     stiffness_eq: float,
     damping_eq: float,
     hop_frequency_hz: float | None,

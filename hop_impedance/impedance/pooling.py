@@ -26,8 +26,13 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
+
+if TYPE_CHECKING:
+    from hop_impedance.impedance.stance_fit import JointImpedanceFit
 
 
 @dataclass(frozen=True)
@@ -52,7 +57,7 @@ class PooledEstimate:
     chi2_per_dof: float
 
 
-def pooled_coefficient(values, std_errors) -> PooledEstimate:
+def pooled_coefficient(values: ArrayLike, std_errors: ArrayLike) -> PooledEstimate:
     """Inverse-variance weighted mean of ``values`` with standard errors ``std_errors`` (see module docstring).
 
     Entries whose value or SE is not finite, or whose SE is not positive, are left out.
@@ -81,12 +86,12 @@ class StancePool:
     def __init__(self, n: int) -> None:
         if int(n) < 1:
             raise ValueError(f"the pool needs n >= 1 stances, got {n}")
-        self._fits: deque = deque(maxlen=int(n))
+        self._fits: deque[JointImpedanceFit] = deque(maxlen=int(n))
 
     def __len__(self) -> int:
         return len(self._fits)
 
-    def add(self, fit) -> bool:
+    def add(self, fit: JointImpedanceFit) -> bool:
         """Add a :class:`JointImpedanceFit`; True if it was accepted into the pool."""
         if not fit.ok:
             return False
@@ -97,7 +102,7 @@ class StancePool:
         """Forget every stance (e.g. when the subject changes)."""
         self._fits.clear()
 
-    def withdraw(self, fit) -> bool:
+    def withdraw(self, fit: JointImpedanceFit) -> bool:
         """Take out a fit added earlier (its stance's take-off was withdrawn); True if it was in the pool."""
         for i, f in enumerate(self._fits):
             if f is fit:

@@ -114,7 +114,8 @@ def _lower_triangle_indices(p: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _upper_values(matrix: np.ndarray) -> np.ndarray:
     """Column-major upper-triangle values of a square matrix (data of :func:`_upper_csc`)."""
-    return matrix.T[_lower_triangle_indices(matrix.shape[0])]
+    values: np.ndarray = matrix.T[_lower_triangle_indices(matrix.shape[0])]
+    return values
 
 
 def _dense_csc(matrix: np.ndarray) -> sparse.csc_matrix:
@@ -133,10 +134,16 @@ def _unconstrained_optimum(P: np.ndarray, q: np.ndarray, Xs: np.ndarray, ys: np.
     the working-set loop: OSQP computes the returned solution.
     """
     try:
-        x = np.linalg.solve(P, -q)
+        x: np.ndarray = np.linalg.solve(P, -q)
     except np.linalg.LinAlgError:
-        return np.linalg.lstsq(Xs, ys, rcond=None)[0]
-    return x if np.isfinite(x).all() else np.linalg.lstsq(Xs, ys, rcond=None)[0]
+        return _least_squares(Xs, ys)
+    return x if np.isfinite(x).all() else _least_squares(Xs, ys)
+
+
+def _least_squares(Xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """SVD least-squares solution of ``Xs x = ys`` (``np.linalg.lstsq``), shape (p,)."""
+    solution: np.ndarray = np.linalg.lstsq(Xs, ys, rcond=None)[0]
+    return solution
 
 
 def _most_violated_per_run(slack: np.ndarray, violated: np.ndarray) -> np.ndarray:
@@ -221,7 +228,8 @@ class ScaledProblem:
 
     def unscaled(self, x: np.ndarray) -> np.ndarray:
         """theta (caller's units) of a scaled solution x."""
-        return x * self.target_norm / self.column_norms
+        theta: np.ndarray = x * self.target_norm / self.column_norms
+        return theta
 
 
 def scaled_problem(design: np.ndarray, target: np.ndarray, constraints: np.ndarray) -> ScaledProblem:

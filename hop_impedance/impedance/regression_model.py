@@ -41,6 +41,7 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.integrate import cumulative_simpson
 
 #: The eight coefficients of Eq. 3, in the order of every coefficient vector.
@@ -118,7 +119,7 @@ class StanceRegressors:
     @cached_property
     def spring_energy_rows(self) -> np.ndarray:
         """E_s = int M_s d(rho) (J) since touchdown, Eq. 8, shape (N, 9) (computed on first use)."""
-        rows = self._spring_energy_polynomial.copy()
+        rows: np.ndarray = self._spring_energy_polynomial.copy()
         rows[:, _K3_COLUMN] = self._spring_energy_k3
         return rows
 
@@ -197,7 +198,7 @@ def damper_moment_regressors(omega: np.ndarray, w: np.ndarray, int_d_domega: np.
     return coefficient_rows(omega.size, b0=omega, b1=w**2 / 2, b2=w**3 / 3, b3=int_d_domega)
 
 
-def joint_moment_regressors(spring_moment_rows: np.ndarray, damper_moment_rows: np.ndarray) -> np.ndarray:
+def joint_moment_regressors(spring_moment_rows: NDArray[np.float64], damper_moment_rows: NDArray[np.float64]) -> np.ndarray:
     """Eq. 5, joint moment ``M = M_s + M_d`` (N m, extensor positive), rows (N, 9).
 
     The two parts have disjoint columns (m0, k0-k3 and b0-b3), so the sum
@@ -221,7 +222,7 @@ def spring_energy_k3_regressor(int_w_drho: np.ndarray, omega: np.ndarray, time_s
     return cumulative_integral(int_w_drho * omega, time_s)
 
 
-def damper_power_regressors(damper_moment_rows: np.ndarray, omega: np.ndarray) -> np.ndarray:
+def damper_power_regressors(damper_moment_rows: NDArray[np.float64], omega: NDArray[np.float64]) -> np.ndarray:
     """Eq. 9, damper power written as ``M_d omega = -P_d`` (W), rows of the same shape as ``damper_moment_rows``.
 
     The constraint ``P_d <= 0`` is ``M_d omega >= 0``; columns of

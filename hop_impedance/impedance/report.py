@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,6 +26,12 @@ from hop_impedance.impedance.statistics import (
     wilcoxon_between_conditions,
     wilcoxon_variable_vs_constant,
 )
+
+if TYPE_CHECKING:  # matplotlib is imported only when figures are drawn
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    Rgba = tuple[float, float, float, float]  # a colormap's colour
 
 JOINTS = ("ankle", "knee", "hip")
 
@@ -137,7 +145,7 @@ def write_figures(records: list[StanceFitRecord], conditions: list[str], out_dir
     return paths
 
 
-def _plot_moment_angle(ax, records: list[StanceFitRecord], conditions: list[str], colors: dict) -> None:
+def _plot_moment_angle(ax: Axes, records: list[StanceFitRecord], conditions: list[str], colors: dict[str, Rgba]) -> None:
     """Measured, variable-K and constant-K moment against rho - rho0 of a middle stance per condition (one joint)."""
     for c in conditions:
         sel = [r.fit for r in records if r.condition == c]
@@ -151,7 +159,7 @@ def _plot_moment_angle(ax, records: list[StanceFitRecord], conditions: list[str]
     ax.set(xlabel="rho - rho0 (rad, flexion +)", ylabel="moment (N m, extensor +)")
 
 
-def _plot_stiffness_time(ax, records: list[StanceFitRecord], conditions: list[str], colors: dict) -> None:
+def _plot_stiffness_time(ax: Axes, records: list[StanceFitRecord], conditions: list[str], colors: dict[str, Rgba]) -> None:
     """K(t) of every stance, coloured by condition (one joint)."""
     for c in conditions:
         for i, r in enumerate(r for r in records if r.condition == c):
@@ -159,7 +167,7 @@ def _plot_stiffness_time(ax, records: list[StanceFitRecord], conditions: list[st
     ax.set(xlabel="time since touchdown (s)", ylabel="K (N m/rad)")
 
 
-def _plot_max_vs_initial(ax, records: list[StanceFitRecord], conditions: list[str], colors: dict) -> None:
+def _plot_max_vs_initial(ax: Axes, records: list[StanceFitRecord], conditions: list[str], colors: dict[str, Rgba]) -> None:
     """Maximal against initial stiffness per stance with the identity line (one joint)."""
     top = 0.0
     for c in conditions:
@@ -172,7 +180,7 @@ def _plot_max_vs_initial(ax, records: list[StanceFitRecord], conditions: list[st
     ax.set(xlabel="initial stiffness k0 (N m/rad)", ylabel="maximal stiffness (N m/rad)")
 
 
-def _save(fig, path: Path, plt) -> Path:
+def _save(fig: Figure, path: Path, plt: ModuleType) -> Path:
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)

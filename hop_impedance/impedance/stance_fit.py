@@ -250,7 +250,8 @@ def _zero_regressor_reason(X: np.ndarray, terms: tuple[str, ...]) -> str | None:
 
 def fit_window(time_s: np.ndarray, options: FitOptions) -> np.ndarray:
     """Boolean mask, shape (N,), of the samples entering the objective (see ``FitOptions.exclude_*``)."""
-    return (time_s >= time_s[0] + options.exclude_touchdown_s) & (time_s <= time_s[-1] - options.exclude_takeoff_s)
+    mask: np.ndarray = (time_s >= time_s[0] + options.exclude_touchdown_s) & (time_s <= time_s[-1] - options.exclude_takeoff_s)
+    return mask
 
 
 def _effective_samples(duration_s: float, n: int, options: FitOptions) -> float | None:
@@ -275,7 +276,8 @@ def _standard_errors(X: np.ndarray, sse: float, n_eff: float, variance_factors: 
     n, p = X.shape
     sigma2 = sse / max(n - p, 1)
     if variance_factors is not None:
-        return np.sqrt(np.maximum(variance_factors, 0.0) * sigma2 * n / n_eff)
+        known: np.ndarray = np.sqrt(np.maximum(variance_factors, 0.0) * sigma2 * n / n_eff)
+        return known
     norms = np.linalg.norm(X, axis=0)
     Xs = X / norms
     gram = Xs.T @ Xs
@@ -285,7 +287,8 @@ def _standard_errors(X: np.ndarray, sse: float, n_eff: float, variance_factors: 
         h = None
     if h is None or not well_conditioned(p, float(h.sum()), 1e-6):
         h = np.linalg.pinv(gram).diagonal()
-    return np.sqrt(np.maximum(h, 0.0) * sigma2 * n / n_eff) / norms
+    errors: np.ndarray = np.sqrt(np.maximum(h, 0.0) * sigma2 * n / n_eff) / norms
+    return errors
 
 
 @dataclass(frozen=True)

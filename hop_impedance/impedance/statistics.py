@@ -6,7 +6,9 @@ stance). Conditions are labels such as hopping frequencies ("1.53").
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy import stats
@@ -49,7 +51,7 @@ def quantity(fit: JointImpedanceFit, name: str) -> float:
     return float(getattr(fit, name))
 
 
-def mean_sd(values) -> str:
+def mean_sd(values: Iterable[float]) -> str:
     """``"mean (SD)"`` with one decimal (sample SD, ddof=1; "-" when empty)."""
     v = np.asarray([x for x in values if np.isfinite(x)], float)
     if v.size == 0:
@@ -104,10 +106,12 @@ def wilcoxon_between_conditions(
     p_value : float
         Two-sided; NaN when fewer than 2 pairs.
     """
-    def values(c):
+    def values(c: str) -> list[tuple[str, float]]:
         return [(r.subject_id, quantity(r.fit, name)) for r in records if r.joint == joint and r.condition == c]
 
     a, b = values(condition_a), values(condition_b)
+    xa: list[float | np.floating[Any]]  # per-subject means (numpy scalars) or the stances' own values
+    xb: list[float | np.floating[Any]]
     if pair_by == "subject":
         subjects = sorted({s for s, _ in a} & {s for s, _ in b})
         xa = [np.mean([v for s, v in a if s == sid]) for sid in subjects]

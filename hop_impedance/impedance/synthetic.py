@@ -78,7 +78,8 @@ class SyntheticStance:
 def _filtered_noise(rng: np.random.Generator, n: int, sigma: float, rate_hz: float, cutoff_hz: float) -> np.ndarray:
     sos = signal.butter(4, cutoff_hz, fs=rate_hz, output="sos")
     raw = rng.normal(0.0, sigma, 3 * n)
-    return signal.sosfiltfilt(sos, raw)[n : 2 * n]
+    filtered: np.ndarray = signal.sosfiltfilt(sos, raw)  # scipy.signal has no type information
+    return filtered[n : 2 * n]
 
 
 def seed_trajectory(joint: str, frequency_hz: float, rate_hz: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
