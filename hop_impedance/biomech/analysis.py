@@ -25,6 +25,7 @@ Pipeline (all times in seconds since the recording's first message)
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -37,8 +38,8 @@ from hop_impedance.biomech.force_plate import (
     sagittal_wrench,
     subtract_offsets,
 )
-from hop_impedance.biomech.inverse_dynamics import inverse_dynamics_2d, joint_power
-from hop_impedance.biomech.joint_angles import JOINT_NAMES
+from hop_impedance.biomech.inverse_dynamics import JointLoads, inverse_dynamics_2d, joint_power
+from hop_impedance.biomech.joint_angles import JOINT_NAMES as JOINT_NAMES  # re-exported: batch/task.py reads it here
 from hop_impedance.biomech.kinematics import Kinematics, body_model_from_markers, compute_kinematics, sagittal_markers
 from hop_impedance.biomech.stance_detection import DetectorOptions, Stance, StanceDetector
 from hop_impedance.biomech.stance_metrics import (
@@ -94,7 +95,7 @@ class AnalysisOptions:
     flight_margin_s: float = DEFAULT_FLIGHT_MARGIN_S
     pad_s: float = 0.3
     body_model: BodyModel | None = None
-    overrides: dict | None = None
+    overrides: dict[str, dict[str, float]] | None = None
     calibration_s: float | None = 1.0
     post_takeoff_s: float | None = None
 
@@ -176,7 +177,7 @@ class RecordingAnalysis:
     subject: Subject
     model: BodyModel | None
     start_ns: int
-    recording: dict
+    recording: dict[str, Any]
     stances: list[StanceResult]
     warnings: list[str] = field(default_factory=list)
     options: AnalysisOptions | None = None
@@ -270,6 +271,7 @@ def analyze_span(
     else:
         span_reason = _too_sparse_reason(t, data.marker_t_s, options)
     if span_reason is None:
+        assert model is not None and data.marker_t_s is not None and data.markers_xz is not None  # checked above
         fs = sampling_rate_hz(t)
         smooth = lowpass(zeroed, fs, options.force_cutoff_hz)
         kin, gaps = compute_kinematics(
@@ -296,7 +298,20 @@ def _too_sparse_reason(force_t_s: np.ndarray, marker_t_s: np.ndarray, options: A
     return None
 
 
-def _stance_result(k, stances, t, zeroed, kin, loads, gaps, span_reason, model, mass, weight, options) -> StanceResult:
+def _stance_result(
+    k: int,
+    stances: list[Stance],
+    t: np.ndarray,
+    zeroed: np.ndarray,
+    kin: Kinematics | None,
+    loads: JointLoads | None,
+    gaps: list[Gap],
+    span_reason: str | None,
+    model: BodyModel | None,
+    mass: float,
+    weight: float,
+    options: AnalysisOptions,
+) -> StanceResult:
     s = stances[k]
     sel = (t >= s.touchdown_s) & (t <= s.takeoff_s)
     fz = zeroed[sel, 1]
@@ -315,10 +330,12 @@ def _stance_result(k, stances, t, zeroed, kin, loads, gaps, span_reason, model, 
     res.com_drop_grf_m = -float(np.min(disp))
     res.leg_stiffness_n_per_m = leg_stiffness(peak, disp)
     reason = span_reason or _gap_reason(gaps, s.touchdown_s, s.takeoff_s, options.max_gap_s)
-    if reason is None and not np.all(kin.reliable[sel]):
-        reason = "markers do not cover the whole stance"
     if reason is not None:
         res.rejection_reason = reason
+        return res
+    assert kin is not None and loads is not None and model is not None  # span_reason None: analyze_span ran them
+    if not np.all(kin.reliable[sel]):
+        res.rejection_reason = "markers do not cover the whole stance"
         return res
     rho, rhod, moment = kin.rho[sel], kin.rhod[sel], loads.moment_nm[sel]
     power = joint_power(moment, rhod)
@@ -352,7 +369,13 @@ def short_window(stances: list[Stance], k: int, options: AnalysisOptions) -> tup
     start = s.touchdown_s - options.pad_s
     if k > 0:
         start = min(start, stances[k - 1].takeoff_s)
-    return start, s.takeoff_s + options.post_takeoff_s
+    return start, s.takeoff_s + _post_takeoff_s(options)
+
+
+def _post_takeoff_s(options: AnalysisOptions) -> float:
+    """``options.post_takeoff_s`` where a short window is analysed (short windows are used only when it is set)."""
+    assert options.post_takeoff_s is not None, "a short window needs options.post_takeoff_s"
+    return options.post_takeoff_s
 
 
 def window_span(data: SpanData, start_s: float, end_s: float) -> SpanData:
@@ -370,6 +393,7 @@ def window_span(data: SpanData, start_s: float, end_s: float) -> SpanData:
     out = SpanData(t[sel], data.wrench[sel])
     if data.marker_t_s is not None:
         tm = data.marker_t_s
+        assert data.markers_xz is not None  # set together with marker_t_s
         i0 = max(int(np.searchsorted(tm, start_s, side="left")) - 1, 0)
         i1 = int(np.searchsorted(tm, end_s, side="right"))
         out.marker_t_s, out.markers_xz = tm[i0:i1], data.markers_xz[i0:i1]
@@ -428,6 +452,7 @@ def extend_past_window(span: SpanData, stances: list[Stance], k: int, options: A
     if span.marker_t_s is None or len(span.marker_t_s) < 2:
         return out
     tm, xz = span.marker_t_s, span.markers_xz
+    assert xz is not None  # set together with marker_t_s
     tm_ext, xz_ext = _extrapolated_markers(tm, xz, t_ext[-1])
     out.marker_t_s, out.markers_xz = np.concatenate([tm, tm_ext]), np.concatenate([xz, xz_ext])
     return out
@@ -530,6 +555,7 @@ def analyze_recording(rec: Recording, options: AnalysisOptions | None = None) ->
     stances = detector.stances
     model = options.body_model
     if model is None and data.markers_xz is not None:
+        assert rec.markers is not None  # data.markers_xz comes from them (recording_span)
         until = rec.start_ns + round(detector.first_takeoff_s * 1e9) if np.isfinite(detector.first_takeoff_s) else None
         model = body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s, until), options.overrides)
     if options.post_takeoff_s is None:
@@ -596,7 +622,7 @@ def _reject_holes(results: list[StanceResult], data: SpanData, options: Analysis
     for k, res in enumerate(results):
         if not res.complete:
             continue  # cut by the recording's start or end: already rejected for that
-        span, end = (data, None) if windows is None else (windows[k], res.takeoff_s + options.post_takeoff_s)
+        span, end = (data, None) if windows is None else (windows[k], res.takeoff_s + _post_takeoff_s(options))
         reason = missing_samples_reason(span, res.touchdown_s, res.takeoff_s, options.max_gap_s,
                                         force_period_s=force_period.value, marker_period_s=marker_period.value,
                                         data_end_s=end)
@@ -605,7 +631,7 @@ def _reject_holes(results: list[StanceResult], data: SpanData, options: Analysis
             res.joints = None
 
 
-def recording_info(rec: Recording) -> dict:
+def recording_info(rec: Recording) -> dict[str, Any]:
     """Topics, sampling rates and time span of a recording (for the JSON)."""
     t0 = rec.start_ns
     ends = [int(rec.force.stamp_ns[-1])]
@@ -619,13 +645,13 @@ def recording_info(rec: Recording) -> dict:
     return {"source": rec.source, "topics": topics, "start_ns": int(t0), "end_ns": end, "duration_s": (end - t0) * 1e-9}
 
 
-def _num(x) -> float | None:
+def _num(x: float | None) -> float | None:
     return None if x is None or not np.isfinite(x) else float(x)
 
 
-def stance_to_json(s: StanceResult, start_ns: int) -> dict:
+def stance_to_json(s: StanceResult, start_ns: int) -> dict[str, Any]:
     """One stance as a JSON-ready dict (schema in docs/analyze_json.md)."""
-    out = {
+    out: dict[str, Any] = {
         "index": s.index,
         "touchdown_s": s.touchdown_s,
         "takeoff_s": s.takeoff_s,
@@ -647,6 +673,8 @@ def stance_to_json(s: StanceResult, start_ns: int) -> dict:
         "joints": None,
     }
     if s.joints is not None:
+        # _stance_result sets the works and stiffness with the joints
+        assert s.brake_work_j is not None and s.push_work_j is not None and s.overall_stiffness_nm_per_rad is not None
         out["joints"] = {}
         for j, name in enumerate(JOINT_NAMES):
             arrays = {k: v.tolist() for k, v in s.joints.joint(name).items()}
@@ -657,7 +685,7 @@ def stance_to_json(s: StanceResult, start_ns: int) -> dict:
     return out
 
 
-def analysis_to_json(analysis: RecordingAnalysis) -> dict:
+def analysis_to_json(analysis: RecordingAnalysis) -> dict[str, Any]:
     """The ``hop-impedance analyze`` JSON document (schema in docs/analyze_json.md)."""
     subj = analysis.subject
     model = analysis.model

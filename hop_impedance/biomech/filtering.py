@@ -1,6 +1,6 @@
 """Low-pass filtering and marker gap filling.
 
-Choices (documented here, tested in ``test/biomech/test_filtering.py``)
+Choices (documented here, tested in ``test/biomech/test_kinematics.py``)
 -----------------------------------------------------------------------
 - Zero-lag low-pass: 2nd-order Butterworth run forwards and backwards
   (``scipy.signal.sosfiltfilt``), i.e. an effective 4th-order response with no
@@ -89,13 +89,15 @@ def lowpass(x: np.ndarray, fs_hz: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ, o
     sos = _butter_sos(int(order), float(cutoff_hz), float(fs_hz))
     # Odd-extension padding of three cut-off periods keeps the edge transient short.
     padlen = min(int(np.ceil(3 * fs_hz / cutoff_hz)), x.shape[0] - 1)
-    return sosfiltfilt(sos, x, axis=0, padlen=padlen)
+    filtered: np.ndarray = sosfiltfilt(sos, x, axis=0, padlen=padlen)  # scipy.signal has no type information
+    return filtered
 
 
 @lru_cache(maxsize=32)
 def _butter_sos(order: int, cutoff_hz: float, fs_hz: float) -> np.ndarray:
     """Butterworth low-pass design (cached: designing costs more than filtering a short window)."""
-    return butter(order, cutoff_hz, btype="low", output="sos", fs=fs_hz)
+    sos: np.ndarray = butter(order, cutoff_hz, btype="low", output="sos", fs=fs_hz)
+    return sos
 
 
 def sampling_rate_hz(t_s: np.ndarray) -> float:

@@ -75,7 +75,8 @@ class Kinematics:
     def body_com_xz(self, model: BodyModel) -> np.ndarray:
         """Whole-body centre of mass (m), shape (N, 2): mass-weighted segment COMs."""
         m = np.array([s.mass_kg for s in model.segments])
-        return np.einsum("s,nsk->nk", m, self.com_xz) / m.sum()
+        com: np.ndarray = np.einsum("s,nsk->nk", m, self.com_xz) / m.sum()
+        return com
 
 
 def sagittal_markers(markers: MarkerSeries) -> np.ndarray:
@@ -90,7 +91,7 @@ def sagittal_markers(markers: MarkerSeries) -> np.ndarray:
     return markers.positions_m[:, idx, :][:, :, [0, 2]]
 
 
-def body_model_from_markers(subject: Subject, markers: MarkerSeries, overrides: dict | None = None) -> BodyModel:
+def body_model_from_markers(subject: Subject, markers: MarkerSeries, overrides: dict[str, dict[str, float]] | None = None) -> BodyModel:
     """de Leva model with segment lengths and foot triangle measured from the markers.
 
     Lengths are the medians, over frames where both end markers are visible,
@@ -151,7 +152,8 @@ def segment_coms(points_xz: np.ndarray, q: np.ndarray, model: BodyModel) -> np.n
     perp = np.array([s.com_perp_m for s in model.segments])
     e1 = np.stack([np.cos(q), np.sin(q)], axis=-1)
     e2 = np.stack([-np.sin(q), np.cos(q)], axis=-1)
-    return points_xz[:, :4, :] + along[None, :, None] * e1 + perp[None, :, None] * e2
+    coms: np.ndarray = points_xz[:, :4, :] + along[None, :, None] * e1 + perp[None, :, None] * e2
+    return coms
 
 
 def _evaluate_spline(

@@ -65,7 +65,9 @@ analysis when the kinematics are the same.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -75,7 +77,10 @@ from hop_impedance.biomech.analysis import AnalysisOptions, RecordingAnalysis, a
 from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.biomech.filtering import fill_gaps, lowpass, sampling_rate_hz
 from hop_impedance.biomech.kinematics import _POINT_IDX, body_model_from_markers, sagittal_markers, segment_angles_from_points
-from hop_impedance.recording import MARKER_NAMES, MarkerSeries, Subject
+from hop_impedance.recording import MARKER_NAMES, MarkerSeries, Recording, Subject
+
+if TYPE_CHECKING:  # impedance/ is imported when fitting only
+    from hop_impedance.impedance.stance_fit import FitOptions, JointImpedanceFit
 
 #: The segments of one leg (the HAT belongs to neither).
 LEG_SEGMENTS = ("foot", "shank", "thigh")
@@ -131,7 +136,7 @@ def fit_leg_pose(markers_xz: np.ndarray, model: BodyModel, iterations: int = 50)
     for _ in range(iterations):
         residual = (leg_pose_markers(pose, model)[:, :5] - x).reshape(len(x), 10)
         (e1, n1), (e2, n2), (e3, n3) = (_unit(pose[:, 2 + k]) for k in range(3))
-        jac = np.zeros((len(x), 5, 2, 5))  # d marker / d (hip_x, hip_z, q1, q2, q3); d e/dq = n, d n/dq = -e
+        jac: np.ndarray = np.zeros((len(x), 5, 2, 5))  # d marker / d (hip_x, hip_z, q1, q2, q3); d e/dq = n, d n/dq = -e
         jac[:, :, 0, 0] = jac[:, :, 1, 1] = 1.0
         jac[:, :4, :, 4] = (-model.thigh.length_m * n3)[:, None]
         jac[:, :3, :, 3] = (-model.shank.length_m * n2)[:, None]
@@ -260,14 +265,15 @@ def analyze_leg(bilateral: BilateralRecording, side: str, options: AnalysisOptio
     return analysis
 
 
-def _leg_body_model(rec, options: AnalysisOptions) -> BodyModel | None:
+def _leg_body_model(rec: Recording, options: AnalysisOptions) -> BodyModel | None:
     """One leg's model: the lumped analysis' scaling rule (same calibration frames) on that leg's markers, halved."""
     if rec.markers is None or not len(rec.markers):
         return None
+    assert rec.subject is not None  # analyze_leg checks it; sum_against_lumped runs analyze_legs first
     return leg_model(body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s), options.overrides))
 
 
-def _analyze_fitted(rec, markers: MarkerSeries, model: BodyModel, options: AnalysisOptions) -> RecordingAnalysis:
+def _analyze_fitted(rec: Recording, markers: MarkerSeries, model: BodyModel, options: AnalysisOptions) -> RecordingAnalysis:
     """The v1 analysis on rigid-fit markers (step 4 of the module docstring); ``options`` kept as the caller's."""
     analysis = analyze_recording(replace(rec, markers=markers), replace(options, body_model=model, marker_cutoff_hz=PASS_THROUGH_HZ))
     analysis.options = replace(options, body_model=model)
@@ -285,7 +291,9 @@ def analyze_legs(bilateral: BilateralRecording, options: AnalysisOptions | None 
     return {side: analyze_leg(bilateral, side, options, rigid) for side in SIDES}
 
 
-def fit_legs(analyses: dict[str, RecordingAnalysis], options=None) -> dict[str, list[dict]]:
+def fit_legs(
+    analyses: dict[str, RecordingAnalysis], options: FitOptions | None = None
+) -> dict[str, list[dict[str, JointImpedanceFit]]]:
     """Impedance fits per leg, stance and joint with the existing fit
     (:func:`~hop_impedance.impedance.recording_fits.fit_recording`): ``{side: [{joint: JointImpedanceFit}]}``."""
     from hop_impedance.impedance.recording_fits import fit_recording
@@ -315,7 +323,9 @@ def moments_on_common_time(analyses: dict[str, RecordingAnalysis], t_s: np.ndarr
     return out
 
 
-def analyses_to_json(analyses: dict[str, RecordingAnalysis], add_fits=None) -> dict:
+def analyses_to_json(
+    analyses: dict[str, RecordingAnalysis], add_fits: Callable[[dict[str, Any], RecordingAnalysis], object] | None = None
+) -> dict[str, Any]:
     """The ``hop-impedance analyze --per-leg`` JSON: one document, each stance tagged with its ``side``.
 
     Each leg's part is :func:`~hop_impedance.biomech.analysis.analysis_to_json`
@@ -368,13 +378,20 @@ def mean_leg_analysis(bilateral: BilateralRecording, options: AnalysisOptions | 
     options = options or AnalysisOptions()
     rec = bilateral.recording
     left, right = bilateral.markers("left"), bilateral.markers("right")
+    # a bilateral recording with a subject: sum_against_lumped runs analyze_legs, which checks both, first
+    assert left is not None and right is not None
     mean = MarkerSeries(right.stamp_ns, right.names, (left.positions_m + right.positions_m) / 2)
-    model = options.body_model or body_model_from_markers(rec.subject, calibration_markers(mean, options.calibration_s),
-                                                          options.overrides)
+    model = options.body_model
+    if model is None:
+        assert rec.subject is not None
+        model = body_model_from_markers(rec.subject, calibration_markers(mean, options.calibration_s), options.overrides)
     if not rigid:
         return analyze_recording(replace(rec, markers=mean), replace(options, body_model=model))
-    fitted = [rigid_leg_markers(bilateral.markers(side), _leg_body_model(bilateral.leg(side), options),
-                                options.marker_cutoff_hz, options.max_gap_s)[0] for side in SIDES]
+    fitted = []
+    for side in SIDES:
+        leg_markers, leg_body = bilateral.markers(side), _leg_body_model(bilateral.leg(side), options)
+        assert leg_markers is not None and leg_body is not None  # both legs' markers (as above)
+        fitted.append(rigid_leg_markers(leg_markers, leg_body, options.marker_cutoff_hz, options.max_gap_s)[0])
     markers = MarkerSeries(fitted[0].stamp_ns, fitted[0].names, (fitted[0].positions_m + fitted[1].positions_m) / 2)
     return _analyze_fitted(rec, markers, model, options)
 

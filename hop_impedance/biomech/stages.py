@@ -224,6 +224,7 @@ class StanceAnalysisStage:
         takeoff = self.detector.first_takeoff_s
         until = round(takeoff * 1e9) if np.isfinite(takeoff) else None
         frames = calibration_markers(MarkerSeries(np.round(t * 1e9).astype(np.int64), MARKER_NAMES, positions), cal_s, until)
+        assert self.subject is not None  # calibrating is set only with a subject (__init__)
         try:
             self.model = body_model_from_markers(self.subject, frames, self.options.overrides)
         except ValueError as exc:

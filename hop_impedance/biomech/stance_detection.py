@@ -337,7 +337,7 @@ class StanceDetector:
         self._pending_after: Stance | None = None  # stance waiting for the next flight's baseline
         self._provisional: Stance | None = None  # stance of an announced, not yet confirmed take-off
         self._rise_s: float | None = None  # last upward crossing of the event level during flight
-        self._stance_samples: collections.deque = collections.deque()  # raw (t, f) since the stance began
+        self._stance_samples: collections.deque[tuple[float, float]] = collections.deque()  # raw (t, f) since the stance began
         self._first_t = np.nan
         self._set_levels()
 
@@ -508,7 +508,7 @@ class StanceDetector:
         """
         last = self._prev[0]
         events.append(ContactEvent("takeoff", last, self._baseline, cut=True))
-        self._record_stance(self._touchdown_s, last, cut_start=self._touchdown_cut, cut_end=True,
+        self._record_stance(self._stance_touchdown_s, last, cut_start=self._touchdown_cut, cut_end=True,
                             cut_why=f"a {t - last:.3f} s force gap (message loss)")
         self._finish_pending()
         self._dip_start = None
@@ -591,7 +591,7 @@ class StanceDetector:
                     to = self._dip_start[0]
                     self._provisional = None
                     events.append(ContactEvent("takeoff", to, self._dip_start[1]))
-                    self._record_stance(self._touchdown_s, to, cut_start=self._touchdown_cut, cut_end=False)
+                    self._record_stance(self._stance_touchdown_s, to, cut_start=self._touchdown_cut, cut_end=False)
                     self._enter_flight(to)
                     for ts, fs in self._dip_samples:
                         self._update_flight_baseline(ts, fs)
@@ -601,7 +601,7 @@ class StanceDetector:
                     rel = f - self._baseline
                 elif self._provisional is None and t - self._dip_start[0] >= opt.provisional_s - _STAMP_TOLERANCE_S:
                     to = self._dip_start[0]
-                    self._provisional = self._stance(self._touchdown_s, to, cut_start=self._touchdown_cut, cut_end=False)
+                    self._provisional = self._stance(self._stance_touchdown_s, to, cut_start=self._touchdown_cut, cut_end=False)
                     if not np.isfinite(self.first_takeoff_s):
                         self.first_takeoff_s = to
                     events.append(ContactEvent("takeoff_provisional", to, self._dip_start[1]))
@@ -649,6 +649,12 @@ class StanceDetector:
             s = self._pending_after
             self.stances.append(replace(s, baseline_after_n=after))
             self._pending_after = None
+
+    @property
+    def _stance_touchdown_s(self) -> float:
+        """Touchdown time of the stance in progress: every entry into stance (_begin, _step) sets it."""
+        assert self._touchdown_s is not None, "touchdown time read outside a stance"
+        return self._touchdown_s
 
     def _record_stance(self, td: float, to: float, cut_start: bool, cut_end: bool, cut_why: str | None = None) -> None:
         self._provisional = None
