@@ -23,7 +23,9 @@ import functools
 import math
 import struct
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Generic, TypeVar
 
 import numpy as np
 from rcl_interfaces.msg import ParameterDescriptor
@@ -224,7 +226,10 @@ class InputTracker:
         return (self.received - 1) / (self.last_wall - self.first_wall)
 
 
-class ReorderBuffer:
+_Item = TypeVar("_Item")
+
+
+class ReorderBuffer(Generic[_Item]):
     """Holds stamped items for up to ``window_ns`` of stamp time so out-of-order arrivals are sorted.
 
     An item that continues the released stream without a hole (its stamp at
@@ -245,21 +250,21 @@ class ReorderBuffer:
 
     def __init__(self, window_ns: int) -> None:
         self.window_ns = int(window_ns)
-        self.items: list[tuple[int, object]] = []
+        self.items: list[tuple[int, _Item]] = []
         self.released_ns: int | None = None
         self.dropped = 0
         self.duplicates = 0
         self.period_ns: int | None = None
         self._period = NominalPeriod()
 
-    def add(self, ns: int, item) -> bool:
+    def add(self, ns: int, item: _Item) -> bool:
         if self.released_ns is not None and ns <= self.released_ns:
             self.dropped += 1
             return False
         self.items.append((ns, item))
         return True
 
-    def release(self, everything: bool = False) -> list[tuple[int, object]]:
+    def release(self, everything: bool = False) -> list[tuple[int, _Item]]:
         """Items in stamp order, each stamp once: those older than newest - window (all with
         ``everything``), then every following one that continues the stream without a hole.
 
@@ -327,7 +332,7 @@ class InputGuard:
         self.checks.set_subject(subject)
         self._log()
 
-    def force(self, items: list[tuple[int, tuple]], fz_index: int) -> None:
+    def force(self, items: Sequence[tuple[int, tuple[float, ...]]], fz_index: int) -> None:
         """Released force items ``(stamp ns, values)``; ``values[fz_index]`` is force.z (N)."""
         if items:
             self.checks.force(np.fromiter((i[0] for i in items), np.int64, len(items)),
@@ -533,7 +538,9 @@ def warm_up_logging() -> None:
     """
     import inspect
 
-    inspect.getframeinfo(inspect.currentframe())
+    frame = inspect.currentframe()  # None only on Python implementations without stack frames
+    if frame is not None:
+        inspect.getframeinfo(frame)
 
 
 class DeferredPublisher:

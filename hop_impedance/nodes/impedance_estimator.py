@@ -248,7 +248,7 @@ class ImpedanceEstimatorNode(Node):
                 self.pub_feed.publish(self.feed)
 
     def _diag_values(self) -> dict:
-        out = {"stances_received": self.stances_in,
+        out: dict[str, object] = {"stances_received": self.stances_in,
                "fit_p50_ms": percentile_ms(self.fit_s, 50), "fit_p99_ms": percentile_ms(self.fit_s, 99),
                "takeoff_to_profile_p50_ms": percentile_ms(self.latency_s, 50),
                "takeoff_to_profile_p99_ms": percentile_ms(self.latency_s, 99)}
@@ -426,8 +426,8 @@ def update_feed(feed: ControllerImpedance, stance: StanceKinetics, stance_result
                 arrays[key][j] = v
             if pools is not None:
                 pools[name].add(fit)
-    for key, v in arrays.items():
-        setattr(feed, key, v)
+    for key, column in arrays.items():
+        setattr(feed, key, column)
     if pools is not None:
         _set_pooled(feed, pools)
     feed.valid = [reasons[n] is None for n in JOINT_NAMES]

@@ -114,10 +114,11 @@ class InverseDynamicsNode(Node):
         self.stage: StanceAnalysisStage | None = None
         self.t0_ns: int | None = None
         self._notes_logged = 0
-        self.force_buf = ReorderBuffer(int(reorder_s * 1e9))
-        self.marker_buf = ReorderBuffer(int(reorder_s * 1e9))
-        self.pending_force: list[tuple[int, object]] = []  # released, waiting for the body model
-        self.pending_markers: list[tuple[int, object]] = []
+        self.force_buf: ReorderBuffer[tuple[float, float, float]] = ReorderBuffer(int(reorder_s * 1e9))
+        self.marker_buf: ReorderBuffer[np.ndarray] = ReorderBuffer(int(reorder_s * 1e9))
+        # released, waiting for the body model
+        self.pending_force: list[tuple[int, tuple[float, float, float]]] = []
+        self.pending_markers: list[tuple[int, np.ndarray]] = []
         self.arrivals = np.zeros((0, 2), np.int64)  # (stamp ns, wall arrival ns) of recent force samples
         self._arrivals_new: list[tuple[int, int]] = []
         self.trackers = {self.force_topic: InputTracker(self.force_topic), MARKER_TOPIC: InputTracker(MARKER_TOPIC)}
@@ -190,7 +191,7 @@ class InverseDynamicsNode(Node):
         if self.stage is not None:
             for res in self.stage.flush():
                 self._publish(res)
-            self._log_notes()
+            self._log_notes(self.stage)
         self.lost_after_last = self.sorted_force.take_lost_before(2**63 - 1)
         if self.sorted_force.lost:
             self.get_logger().warning(
@@ -241,14 +242,14 @@ class InverseDynamicsNode(Node):
             self.analysis_s.append(time.perf_counter() - t_start)
         for res in results:
             self._publish(res)
-        self._log_notes()
+        self._log_notes(self.stage)
         self._note_processed(forces, markers)
 
-    def _log_notes(self) -> None:
+    def _log_notes(self, stage: StanceAnalysisStage) -> None:
         """The stage's notes (body model scaled, force-only), each logged once."""
-        for note in self.stage.notes[self._notes_logged:]:
+        for note in stage.notes[self._notes_logged:]:
             (self.get_logger().info if note.startswith("body model scaled") else self.get_logger().warning)(note)
-        self._notes_logged = len(self.stage.notes)
+        self._notes_logged = len(stage.notes)
 
     def _note_processed(self, forces, markers) -> None:
         for topic, items in ((self.force_topic, forces), (MARKER_TOPIC, markers)):
@@ -299,6 +300,7 @@ class InverseDynamicsNode(Node):
         return int(self.arrivals[idx, 1]) if idx < len(self.arrivals) else 0
 
     def _publish(self, res: StanceResult) -> None:
+        assert self.t0_ns is not None  # process() sets it before the stage can give a stance
         if self.guard.failure is not None:
             res.rejection_reason, res.joints = self.guard.reason(res.rejection_reason), None
         if self.side != "lumped":
@@ -318,7 +320,7 @@ class InverseDynamicsNode(Node):
             self.pub_frames.extend(lambda: frame_messages(res, t0_ns))
 
     def _diag_values(self) -> dict:
-        out = {}
+        out: dict[str, object] = {}
         for topic, t in self.trackers.items():
             name = "force" if topic == self.force_topic else "markers"
             out |= {f"{name}_received": t.received, f"{name}_rate_hz": t.rate_hz, f"{name}_lost": t.lost,
@@ -342,8 +344,9 @@ class InverseDynamicsNode(Node):
         return out
 
     def _diag_level(self) -> tuple[int, str]:
-        if self.guard.level() is not None:
-            return self.guard.level()
+        level = self.guard.level()
+        if level is not None:
+            return level
         lost = sum(t.lost for t in self.trackers.values()) + self.force_buf.dropped + self.marker_buf.dropped
         return (1, f"{lost} input messages lost or too late") if lost else (0, "ok")
 
@@ -407,6 +410,7 @@ def stance_from_message(msg: StanceKinetics) -> StanceResult:
 def frame_messages(res: StanceResult, t0_ns: int) -> list[JointKinetics]:
     """One ``JointKinetics`` per force frame of an analysed stance."""
     j = res.joints
+    assert j is not None, "frame_messages needs an analysed stance (joint data)"  # callers check res.joints
     out = []
     for i in range(len(j.time_s)):
         msg = JointKinetics(stance_index=int(res.index), time_since_touchdown_s=float(j.time_s[i]))

@@ -53,7 +53,9 @@ from hop_impedance.io.recording_io import LAB_FRAME_ID
 from hop_impedance.nodes.common import Diagnostics, InputTracker, declare, stamp_ns
 from hop_impedance.nodes.qos import input_qos
 from hop_impedance.recording import MARKER_NAMES, MARKER_TOPIC
-from mocap4r2_msgs.msg import Marker, Markers
+
+# mypy finds the repository's mocap4r2_msgs/ (the .msg definitions) as a namespace package before the generated one
+from mocap4r2_msgs.msg import Marker, Markers  # type: ignore[attr-defined]
 
 
 class MarkerIdentities:

@@ -79,8 +79,8 @@ def plate_layouts(topics: list[str], names: list[str], origins: list[float], yaw
     yaws = list(yaws) if len(yaws) else [0.0] * p
     if len(yaws) != p:
         raise ValueError(f"plate_combiner: {len(yaws)} plate_yaw_deg for {p} plate_topics")
-    return [PlateLayout(n, tuple(float(v) for v in origins[3 * i:3 * i + 3]), float(y))
-            for i, (n, y) in enumerate(zip(names, yaws))]
+    xyz = [(float(origins[3 * i]), float(origins[3 * i + 1]), float(origins[3 * i + 2])) for i in range(p)]
+    return [PlateLayout(n, xyz[i], float(y)) for i, (n, y) in enumerate(zip(names, yaws))]
 
 
 class PlateCombinerNode(Node):
@@ -108,7 +108,7 @@ class PlateCombinerNode(Node):
         self.layouts = plate_layouts(topics, names, origins, yaws)
         self.topics = topics
         self.stage = PlateCombinerStage(self.layouts, origin, int(max_skew * 1e9), int(jitter * 1e9), int(wait * 1e9))
-        self.buffers = [ReorderBuffer(int(reorder_s * 1e9)) for _ in topics]
+        self.buffers: list[ReorderBuffer[tuple[float, ...]]] = [ReorderBuffer(int(reorder_s * 1e9)) for _ in topics]
         self.trackers = [InputTracker(t) for t in topics]
         self.published = 0
         self.pub = self.create_publisher(WrenchStamped, self.output_topic, input_qos(reliable))
@@ -187,7 +187,7 @@ class PlateCombinerNode(Node):
         return 0, "ok"
 
     def _diag_values(self) -> dict:
-        out = {"published": self.published, "instants_dropped": self.stage.dropped}
+        out: dict[str, object] = {"published": self.published, "instants_dropped": self.stage.dropped}
         for lay, t, buf, missing, skew in zip(self.layouts, self.trackers, self.buffers, self.stage.missing, self.stage.skew_ns):
             out[f"{lay.name}_received"] = t.received
             out[f"{lay.name}_rate_hz"] = t.rate_hz

@@ -51,6 +51,7 @@ from __future__ import annotations
 import bisect
 import threading
 import time
+from typing import Any
 
 import rclpy
 from rclpy.duration import Duration
@@ -84,7 +85,7 @@ def _raw_messages(path: str, topics: list[str], stops: list[str] | None = None):
 class ReplayNode(Node):
     """Publishes a recording's messages; see the module docstring for parameters."""
 
-    def __init__(self, **kwargs):
+    def __init__(self, **kwargs) -> None:
         super().__init__("replay", **kwargs)
         self.declare_parameter("recording", "", _desc("MCAP file or rosbag2 folder to play"))
         self.declare_parameter("rate", 1.0, _desc("speed factor; 0 = as fast as subscribers take it without loss"))
@@ -227,7 +228,7 @@ class ReplayNode(Node):
         return 0 if first is None else (last - first) + 1_000_000
 
     def _shifted(self, topic: str, data: bytes, shift_ns: int) -> bytes:
-        msg = deserialize_message(data, self._types[topic])
+        msg: Any = deserialize_message(data, self._types[topic])  # a generated message class (no type information)
         total = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec + shift_ns
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(total, 1_000_000_000)
         return serialize_message(msg)

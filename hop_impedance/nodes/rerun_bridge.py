@@ -163,7 +163,7 @@ class RerunBridge(Node):
         self._kinetics: list = []
         self._last_kinetics: tuple[int, int] | None = None  # (stance index, last stamp ns)
         self._profiles: dict[int, dict] = {}
-        self._summaries: dict[int, object] = {}
+        self._summaries: dict[int, StanceSummary] = {}
         self.stances_logged = 0
         self.create_subscription(WrenchStamped, FORCE_TOPIC, self._wrench.append, input_qos(reliable))
         self.create_subscription(MarkerArray, MARKER_TOPIC, self._markers.append, input_qos(reliable))

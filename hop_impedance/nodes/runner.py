@@ -23,6 +23,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rclpy.node import Node
 
@@ -39,6 +40,9 @@ from hop_impedance.nodes.common import (
 )
 from hop_impedance.nodes.qos import latched_qos, result_qos
 from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC
+
+if TYPE_CHECKING:
+    from hop_impedance.nodes.replay import ReplayNode
 
 CONSUMERS = ["/stance_detector", "/inverse_dynamics"]
 NODE_MODULES = ("stance_detector", "inverse_dynamics", "impedance_estimator", "recorder", "replay")
@@ -177,7 +181,7 @@ class ResultCollector(Node):
 
 def node_parameters(cfg: PipelineConfig) -> dict[str, dict]:
     """Parameters of each node for ``cfg`` (on top of ``cfg.params_file``; ``cfg.overrides`` last)."""
-    params = {
+    params: dict[str, dict] = {
         "replay": {"recording": str(cfg.recording), "rate": float(cfg.rate), "loop": bool(cfg.loop),
                    "consumers": CONSUMERS, "wait_for_subscribers_s": 10.0},
         "stance_detector": {},
@@ -266,7 +270,7 @@ def _in_process_nodes(cfg: PipelineConfig, context) -> list[Node]:
     return nodes
 
 
-def _replay_node(cfg: PipelineConfig, context) -> Node:
+def _replay_node(cfg: PipelineConfig, context) -> ReplayNode:
     """The replay (last: it starts playing once its subscribers are matched)."""
     from rclpy.parameter import Parameter
 
@@ -291,20 +295,20 @@ def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
     context = rclpy.Context()
     t0 = time.monotonic()
     rclpy.init(context=context, args=["--ros-args", "--params-file", cfg.params_file] if cfg.params_file else None)
-    nodes = []
+    nodes: list[Node] = []
     try:
         collector = ResultCollector(context=context)
-        nodes = [collector] + _in_process_nodes(cfg, context)
+        nodes = [collector, *_in_process_nodes(cfg, context)]
         executor = _executor_for(context)
         for n in nodes:
             executor.add_node(n)
         _wait_until_ready(executor, cfg, t0 + cfg.timeout_s)
-        nodes.append(_replay_node(cfg, context))
-        executor.add_node(nodes[-1])
+        replay = _replay_node(cfg, context)
+        nodes.append(replay)
+        executor.add_node(replay)
         warm_up_logging()  # else the first log call in a callback costs tens of ms (the first stance's latency)
         _spin_until_done(executor, collector, cfg, t0)
         _wait_for_bridge(executor, nodes, len(collector.report.summaries))
-        replay = nodes[-1]
         replay.stop()
         replay.finished.wait(5.0)  # the playback thread ends before its node is destroyed
         collector.report.replay_play_s = replay.play_s or float("nan")
@@ -324,8 +328,14 @@ def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
 def _wait_for_bridge(executor, nodes: list[Node], n_stances: int, timeout_s: float = 5.0) -> None:
     """If a Rerun bridge runs in this process, spin until it has logged ``n_stances`` stances (bounded)."""
     bridges = [n for n in nodes if n.get_name() == "rerun_bridge"]
+    if not bridges:
+        return
+    from hop_impedance.nodes.rerun_bridge import RerunBridge  # imported already: the bridge runs
+
+    bridge = bridges[0]
+    assert isinstance(bridge, RerunBridge)
     deadline = time.monotonic() + timeout_s
-    while bridges and bridges[0].stances_logged < n_stances and time.monotonic() < deadline:
+    while bridge.stances_logged < n_stances and time.monotonic() < deadline:
         executor.spin_once(timeout_sec=0.05)
 
 

@@ -62,7 +62,7 @@ class StanceDetectorNode(Node):
         self.stage: StanceDetectorStage | None = None  # once /subject gives the body weight
         self.waiting: list[tuple[np.ndarray, np.ndarray]] = []  # released samples before that
         self.t0_ns: int | None = None
-        self.buffer = ReorderBuffer(int(reorder_s * 1e9))
+        self.buffer: ReorderBuffer[float] = ReorderBuffer(int(reorder_s * 1e9))
         self.tracker = InputTracker(FORCE_TOPIC)
         self.events_out = 0
         self.touchdowns = 0
@@ -123,6 +123,7 @@ class StanceDetectorNode(Node):
         keep = self._recent_t > t[-1] - 3.0
         self._recent_t = np.concatenate([self._recent_t[keep], t])
         self._recent_fz = np.concatenate([self._recent_fz[keep], fz])
+        assert self.stage is not None  # the callers create it first
         for ev in self.stage.push((t, fz)):
             self._publish(ev)
 
@@ -162,6 +163,8 @@ class StanceDetectorNode(Node):
         """
         if ev.kind not in ("touchdown", "takeoff"):
             return
+        # events come from the stage, which gets data after process() set t0_ns
+        assert self.stage is not None and self.t0_ns is not None
         msg = StanceEvent(threshold_n=float(self.stage.detector.levels_n[1]), complete=True,
                           flight_time_before_s=math.nan)
         stances = list(self.stage.stances)

@@ -27,7 +27,7 @@ class TopicCount:
 
     @property
     def span_s(self) -> float:
-        return 0.0 if self.first_ns is None else (self.last_ns - self.first_ns) * 1e-9
+        return 0.0 if self.first_ns is None or self.last_ns is None else (self.last_ns - self.first_ns) * 1e-9
 
     @property
     def rate_hz(self) -> float:
