@@ -43,6 +43,7 @@ from __future__ import annotations
 import os
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from typing import Any
 
 import multiprocessing as mp
 import numpy as np
@@ -109,7 +110,7 @@ class HeldOutRuns:
 
     def figures(self, scales: np.ndarray) -> dict:
         """Pooled held-out gap: ``total`` (mean G_i, first key) then per-signal RMS (and RMS / scale) and duration."""
-        out = {"total": float(np.mean(self.gaps))}
+        out: dict[str, Any] = {"total": float(np.mean(self.gaps))}  # a JSON document
         for k, sig in enumerate(GAP_SIGNALS):
             rms = float(np.sqrt(np.nanmean(self.rms[:, k] ** 2)))
             out[sig] = {"rms": rms, "relative_rms": rms / float(scales[k])}
@@ -343,6 +344,7 @@ def score(trial: MeasuredTrial, current: HeldOutRuns, cands: list[HeldOutRuns]) 
     for c in cands:
         with np.errstate(divide="ignore", invalid="ignore"):
             d = np.log(current.gaps) - np.log(c.gaps)
+        assert c.effect is not None  # a candidate adds an effect (remaining(spec)); None is the current model
         phys = physics_evidence(trial, current, c)
         ok, why = admissible(c.effect, phys)
         phys["admissible"], phys["inadmissible_because"] = ok, why or None

@@ -94,12 +94,13 @@ def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance]) -> tuple[np.nd
 
 
 def _fit_timed(spec: ModelSpec, stances, grid: list[dict]) -> tuple[ModelSpec, np.ndarray]:
-    best = None
+    best: tuple[ModelSpec, np.ndarray, float] | None = None
     for params in grid:
         trial_spec = replace(spec, **params)
         coefs, sse = fit_joint_law(trial_spec, stances)
         if best is None or sse < best[2]:
             best = (trial_spec, coefs, sse)
+    assert best is not None, "empty grid"  # the callers' grids are non-empty constants
     return best[0], best[1]
 
 
@@ -321,7 +322,7 @@ def residuals(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: Measu
     out["com"] = com_residual(trial, s, spec)
     keep = core(len(s.t_s))
     out = {k: v[keep] for k, v in out.items()}
-    predicted_toe = 0.0
+    predicted_toe: float | np.ndarray = 0.0
     law = surface_law(spec, s)
     if law is not None:
         c, p, _ = law

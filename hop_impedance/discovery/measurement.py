@@ -153,14 +153,16 @@ def measure_trial(rec: Recording, marker_latency_s: float = 0.0, options: Analys
         raise ValueError(f"{rec.source or 'recording'}: discovery needs marker data on the marker topic")
     options = options or AnalysisOptions()
     rec = shift_marker_stream(rec, marker_latency_s)
+    markers = rec.markers
+    assert markers is not None  # checked above; shift_marker_stream keeps them
     analysis = analyze_recording(rec, options)
     if analysis.model is None:
         raise ValueError(f"{rec.source or 'recording'}: no body model could be built from the markers")
     t_f = (rec.force.stamp_ns - analysis.start_ns) * 1e-9
-    t_m = (rec.markers.stamp_ns - analysis.start_ns) * 1e-9
+    t_m = (markers.stamp_ns - analysis.start_ns) * 1e-9
     fz_raw = rec.force.force_n[:, 2].astype(float)
     fz_lp = lowpass(fz_raw, sampling_rate_hz(t_f), options.force_cutoff_hz)
-    xz = sagittal_markers(rec.markers)
+    xz = sagittal_markers(markers)
     filled, _, _ = fill_gaps(t_m, xz, options.max_gap_s)
     kin, _ = compute_kinematics(t_m, xz, t_f, analysis.model, options.marker_cutoff_hz, options.max_gap_s)
     com_acc = _com_z_spline(t_m, np.where(np.isfinite(filled), filled, np.nan), analysis.model, options.marker_cutoff_hz)
@@ -169,8 +171,10 @@ def measure_trial(rec: Recording, marker_latency_s: float = 0.0, options: Analys
     prev_takeoff = float(t_f[0]) - 1.0
     for s in analysis.stances:
         reason = s.rejection_reason
-        if reason is None and len(s.joints.time_s) < MIN_STANCE_SAMPLES:
-            reason = f"too short for discovery: {len(s.joints.time_s)} force samples < {MIN_STANCE_SAMPLES}"
+        if reason is None:
+            assert s.joints is not None  # analyze_recording keeps joint data exactly for the stances it accepts
+            if len(s.joints.time_s) < MIN_STANCE_SAMPLES:
+                reason = f"too short for discovery: {len(s.joints.time_s)} force samples < {MIN_STANCE_SAMPLES}"
         sel = (t_f >= s.touchdown_s) & (t_f <= s.takeoff_s)
         if reason is None and not np.all(np.isfinite(kin.points_xz[sel])):
             reason = "marker kinematics not finite in stance"
@@ -183,7 +187,7 @@ def measure_trial(rec: Recording, marker_latency_s: float = 0.0, options: Analys
     if not stances:
         reasons = "; ".join(f"stance {r['index']}: {r['reason']}" for r in rejected) or "no stance detected"
         raise ValueError(f"{rec.source or 'recording'}: no stance usable for discovery ({reasons})")
-    mass = rec.subject.body_mass_kg
+    mass = analysis.subject.body_mass_kg  # rec.subject (analyze_recording raises without one)
     return MeasuredTrial(stances, rejected, chain, mass, com_acc, marker_latency_s, list(analysis.warnings))
 
 

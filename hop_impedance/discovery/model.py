@@ -131,7 +131,7 @@ class ModelSpec:
 
 def elastic_terms(spec: ModelSpec) -> tuple[str, ...]:
     """Names of the elastic regressors of the joint law."""
-    names = ("k0",)
+    names: tuple[str, ...] = ("k0",)
     if spec.has("angle_dependent_stiffness"):
         names += ("k1", "k2")
     if spec.has("rate_dependent_stiffness"):
@@ -228,7 +228,7 @@ def stance_features(spec: ModelSpec, t_s, rho, omega) -> list[np.ndarray]:
     dw = omega - omega[0]
     s_int = cumulative_trapezoid(dw * omega, t_s, axis=0, initial=0.0)
     s_speed = cumulative_trapezoid((np.abs(omega) - np.abs(omega[0])) * omega, t_s, axis=0, initial=0.0)
-    tangent = [None] * 3
+    tangent: list[np.ndarray | None] = [None] * 3
     if spec.has("time_dependent_activation") and spec.activation_form == "tangent":
         g = activation_modulation(spec, t_s)
         tangent = [np.stack([cumulative_trapezoid(g * r, t_s, initial=0.0)

@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 from scipy.integrate import trapezoid
@@ -61,19 +62,19 @@ def residual_evidence(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial) 
     momentum-balance residual (``com``).
     """
     res = [residuals(spec, coefs, trial, s) for s in trial.stances]
-    out = {}
+    out: dict[str, Any] = {}  # a JSON document
     for sig in SIGNALS:
         if sig == "flight":
             v = np.concatenate([r[sig] for r in res])
             out[sig] = {"mean": float(v.mean()) if v.size else None, "rms": float(np.sqrt(np.mean(v**2))) if v.size else None,
                         "n_samples": int(v.size)}
             continue
-        thirds = {k: [] for k in ("early", "mid", "late")}
+        thirds: dict[str, list[np.ndarray]] = {k: [] for k in ("early", "mid", "late")}
         for r in res:
             for k, chunk in zip(thirds, np.array_split(r[sig], 3)):
                 thirds[k].append(chunk)
         v = np.concatenate([r[sig] for r in res])
-        entry = {"rms": float(np.sqrt(np.mean(v**2))), **{f"rms_{k}": float(np.sqrt(np.mean(np.concatenate(c) ** 2)))
+        entry: dict[str, Any] = {"rms": float(np.sqrt(np.mean(v**2))), **{f"rms_{k}": float(np.sqrt(np.mean(np.concatenate(c) ** 2)))
                                                             for k, c in thirds.items()}}
         j = JOINT_NAMES.index(sig.split("_")[1]) if sig.startswith("moment_") else 0
         regressors = {
@@ -96,6 +97,7 @@ def parameters_of(spec: ModelSpec, coefs: np.ndarray, effect: str | None) -> dic
     """JSON parameters of the model (all of it for the baseline, the effect's own ones otherwise)."""
     names = feature_names(spec)
     law = {j: {n: float(c) for n, c in zip(names, coefs[k])} for k, j in enumerate(JOINT_NAMES)}
+    out: dict[str, Any]  # a JSON document
     if effect in (None, "angle_dependent_stiffness", "rate_dependent_stiffness", "joint_damping"):
         out = {"joint_law": law}
     elif effect == "time_dependent_activation":
@@ -110,11 +112,13 @@ def parameters_of(spec: ModelSpec, coefs: np.ndarray, effect: str | None) -> dic
         out = {"onset_s": spec.onset_s, "duration_s": spec.duration_s,
                "amplitude_nm": {j: law[j]["push"] for j in JOINT_NAMES}, "joint_law": law}
     elif effect == "surface_compliance":
+        assert spec.compliance is not None  # identify.fit_surfaces set it with the effect
         c, p = spec.compliance
         out = {"displacement_law": "toe dz = -c Fz^p", "c": c, "p": p,
                "stiffness_n_per_m_n": c ** (-1.0 / p) if c > 0 else None, "exponent_n": 1.0 / p,
                "damping_n_s_per_m": spec.ground_damping_n_s_m}
         if spec.surface_split is not None:
+            assert spec.stiff_compliance is not None  # fit_surfaces sets both or neither
             c2, p2, d2 = spec.stiff_compliance
             out["two_surfaces"] = {
                 "split_compliance_index": spec.surface_split,
