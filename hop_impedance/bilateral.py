@@ -114,7 +114,9 @@ def sum_plates(plates: dict[str, ForcePlateSeries]) -> ForcePlateSeries:
     for p in series[1:]:
         if p.stamp_ns.shape != stamps.shape or np.any(p.stamp_ns != stamps):
             raise ValueError("per-plate series must share their stamps to be summed")
-    return ForcePlateSeries(stamps.copy(), sum(p.force_n for p in series), sum(p.torque_nm for p in series))
+    force = sum((p.force_n for p in series[1:]), series[0].force_n.copy())
+    torque = sum((p.torque_nm for p in series[1:]), series[0].torque_nm.copy())
+    return ForcePlateSeries(stamps.copy(), force, torque)
 
 
 # -- MCAP ----------------------------------------------------------------------

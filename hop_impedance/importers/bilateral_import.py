@@ -61,6 +61,8 @@ def session_to_bilateral(
     frame: dict = {}
     rec = session_to_recording(session, right, frame_out=frame, **options)
     left_rec = _left_leg_recording(session, left, rec, frame, options)
+    # session_to_recording returns markers for a session with markers (checked above)
+    assert rec.markers is not None and left_rec.markers is not None
     chosen = session.plates if options.get("plates") is None else [session.plates[i] for i in options["plates"]]
     per_plate = _plate_reactions(chosen, frame["rotation"], frame["origin"], rec.force.force_n)
     ankle_y = {
@@ -78,6 +80,7 @@ def session_to_bilateral(
 
 def _left_leg_recording(session: LabSession, left: MarkerMapping, rec: Recording, frame: dict, options: dict) -> Recording:
     """The v1 import with the left map, the right one's subject and origin; the lab axes must agree."""
+    assert rec.subject is not None  # session_to_recording always sets the subject
     left_options = {**options, "mass_kg": rec.subject.body_mass_kg, "height_m": rec.subject.body_height_m}
     left_frame: dict = {}
     left_rec = session_to_recording(replace(session, origin_m=frame["origin"]), left, frame_out=left_frame, **left_options)
