@@ -53,8 +53,10 @@ _LawT = TypeVar("_LawT", bound="ImpedanceLaw")
 class ImpedanceLaw(ABC):
     """A joint torque law. Arrays broadcast: ``t_s`` shape (...), joint arrays (..., 3)."""
 
-    #: Number of extra ODE states the law integrates during stance.
-    n_states: int = 0
+    @property
+    def n_states(self) -> int:
+        """Number of extra ODE states the law integrates during stance (a subclass may set a class attribute)."""
+        return 0
 
     @abstractmethod
     def moments_nm(
@@ -233,7 +235,7 @@ class CompositeLaw(ImpedanceLaw):
     parts: tuple[ImpedanceLaw, ...]
 
     @property
-    def n_states(self) -> int:  # type: ignore[override]
+    def n_states(self) -> int:
         return sum(p.n_states for p in self.parts)
 
     def _slices(self):
