@@ -12,7 +12,6 @@ sample (force-plate rate) on :data:`GAP_SIGNALS`:
 
 from __future__ import annotations
 
-
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.discovery.identify import surface_law
 from hop_impedance.discovery.measurement import MeasuredStance

@@ -40,17 +40,16 @@ of the analysis' own body model, nothing is fitted to segment masses).
 
 from __future__ import annotations
 
+import multiprocessing as mp
 import os
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
-import multiprocessing as mp
 import numpy as np
 from scipy import stats
 from scipy.integrate import trapezoid
 
-from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.discovery.forward import GAP_SIGNALS, ground_of
 from hop_impedance.discovery.identify import identify, per_stance_push_off, touchdown_moments
 from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial, measure_trial, weight_n

@@ -33,10 +33,10 @@ from scipy.optimize import minimize_scalar
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial
 from hop_impedance.discovery.model import (
+    BELL_GRID_S,
     DURATION_GRID_S,
     JOINT_EFFECTS,
     ONSET_GRID_S,
-    BELL_GRID_S,
     TAU_GRID_S,
     ModelSpec,
     stance_features,

@@ -120,7 +120,7 @@ class ModelSpec:
     stiff_compliance: tuple[float, float, float] | None = None
     surface_split: float | None = None
 
-    def with_effect(self, name: str, **params) -> "ModelSpec":
+    def with_effect(self, name: str, **params) -> ModelSpec:
         """Copy with ``name`` appended and parameters replaced."""
         return replace(self, effects=self.effects + (name,), **params)
 

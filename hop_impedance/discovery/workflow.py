@@ -74,8 +74,8 @@ def residual_evidence(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial) 
             for k, chunk in zip(thirds, np.array_split(r[sig], 3)):
                 thirds[k].append(chunk)
         v = np.concatenate([r[sig] for r in res])
-        entry: dict[str, Any] = {"rms": float(np.sqrt(np.mean(v**2))), **{f"rms_{k}": float(np.sqrt(np.mean(np.concatenate(c) ** 2)))
-                                                            for k, c in thirds.items()}}
+        entry: dict[str, Any] = {"rms": float(np.sqrt(np.mean(v**2))),
+                                 **{f"rms_{k}": float(np.sqrt(np.mean(np.concatenate(c) ** 2))) for k, c in thirds.items()}}
         j = JOINT_NAMES.index(sig.split("_")[1]) if sig.startswith("moment_") else 0
         regressors = {
             "angle_change": np.concatenate([(s.rho_rad[:, j] - s.rho_rad[0, j])[core(len(s.t_s))] for s in trial.stances]),
