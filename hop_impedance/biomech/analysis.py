@@ -50,7 +50,14 @@ from hop_impedance.biomech.stance_metrics import (
     overall_joint_stiffness,
 )
 from hop_impedance.recording import (
-    FORCE_TOPIC, GRAVITY_M_S2, MARKER_NAMES, MARKER_TOPIC, SUBJECT_TOPIC, MarkerSeries, Recording, Subject,
+    FORCE_TOPIC,
+    GRAVITY_M_S2,
+    MARKER_NAMES,
+    MARKER_TOPIC,
+    SUBJECT_TOPIC,
+    MarkerSeries,
+    Recording,
+    Subject,
 )
 
 
@@ -279,7 +286,8 @@ def analyze_span(
         )
         loads = inverse_dynamics_2d(kin.points_xz, kin.com_xz, kin.com_acc, kin.qdd, smooth, model)
     weight = body_mass_kg * GRAVITY_M_S2
-    return [_stance_result(k, stances, t, zeroed, kin, loads, gaps, span_reason, model, body_mass_kg, weight, options) for k in targets]
+    return [_stance_result(k, stances, t, zeroed, kin, loads, gaps, span_reason, model, body_mass_kg, weight, options)
+            for k in targets]
 
 
 def _too_sparse_reason(force_t_s: np.ndarray, marker_t_s: np.ndarray, options: AnalysisOptions) -> str | None:
@@ -557,7 +565,8 @@ def analyze_recording(rec: Recording, options: AnalysisOptions | None = None) ->
     if model is None and data.markers_xz is not None:
         assert rec.markers is not None  # data.markers_xz comes from them (recording_span)
         until = rec.start_ns + round(detector.first_takeoff_s * 1e9) if np.isfinite(detector.first_takeoff_s) else None
-        model = body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s, until), options.overrides)
+        calibration = calibration_markers(rec.markers, options.calibration_s, until)
+        model = body_model_from_markers(rec.subject, calibration, options.overrides)
     if options.post_takeoff_s is None:
         results = analyze_span(data, stances, list(range(len(stances))), model, rec.subject.body_mass_kg, options)
         _reject_holes(results, data, options)
@@ -565,7 +574,8 @@ def analyze_recording(rec: Recording, options: AnalysisOptions | None = None) ->
         windows = [analyze_short_window(data, stances, k, model, rec.subject.body_mass_kg, options) for k in range(len(stances))]
         results = [r for r, _ in windows]
         _reject_holes(results, data, options, [span for _, span in windows])
-    return RecordingAnalysis(rec.subject, model, rec.start_ns, recording_info(rec), results, list(rec.warnings) + detector.warnings, options)
+    warnings = list(rec.warnings) + detector.warnings
+    return RecordingAnalysis(rec.subject, model, rec.start_ns, recording_info(rec), results, warnings, options)
 
 
 #: Stamp tolerance of the calibration window's bounds (ns): the live stage works on float seconds, so a

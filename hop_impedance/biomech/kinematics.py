@@ -91,7 +91,9 @@ def sagittal_markers(markers: MarkerSeries) -> np.ndarray:
     return markers.positions_m[:, idx, :][:, :, [0, 2]]
 
 
-def body_model_from_markers(subject: Subject, markers: MarkerSeries, overrides: dict[str, dict[str, float]] | None = None) -> BodyModel:
+def body_model_from_markers(
+    subject: Subject, markers: MarkerSeries, overrides: dict[str, dict[str, float]] | None = None
+) -> BodyModel:
     """de Leva model with segment lengths and foot triangle measured from the markers.
 
     Lengths are the medians, over frames where both end markers are visible,

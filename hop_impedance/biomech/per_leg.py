@@ -75,7 +75,7 @@ from scipy.interpolate import CubicSpline
 from hop_impedance.bilateral import SIDES, BilateralRecording
 from hop_impedance.biomech.analysis import AnalysisOptions, RecordingAnalysis, analyze_recording, calibration_markers
 from hop_impedance.biomech.body_model import BodyModel
-from hop_impedance.biomech.filtering import fill_gaps, lowpass, sampling_rate_hz
+from hop_impedance.biomech.filtering import fill_gaps, lowpass
 from hop_impedance.biomech.kinematics import _POINT_IDX, body_model_from_markers, sagittal_markers, segment_angles_from_points
 from hop_impedance.recording import MARKER_NAMES, MarkerSeries, Recording, Subject
 
@@ -270,12 +270,14 @@ def _leg_body_model(rec: Recording, options: AnalysisOptions) -> BodyModel | Non
     if rec.markers is None or not len(rec.markers):
         return None
     assert rec.subject is not None  # analyze_leg checks it; sum_against_lumped runs analyze_legs first
-    return leg_model(body_model_from_markers(rec.subject, calibration_markers(rec.markers, options.calibration_s), options.overrides))
+    calibration = calibration_markers(rec.markers, options.calibration_s)
+    return leg_model(body_model_from_markers(rec.subject, calibration, options.overrides))
 
 
 def _analyze_fitted(rec: Recording, markers: MarkerSeries, model: BodyModel, options: AnalysisOptions) -> RecordingAnalysis:
     """The v1 analysis on rigid-fit markers (step 4 of the module docstring); ``options`` kept as the caller's."""
-    analysis = analyze_recording(replace(rec, markers=markers), replace(options, body_model=model, marker_cutoff_hz=PASS_THROUGH_HZ))
+    leg_options = replace(options, body_model=model, marker_cutoff_hz=PASS_THROUGH_HZ)
+    analysis = analyze_recording(replace(rec, markers=markers), leg_options)
     analysis.options = replace(options, body_model=model)
     return analysis
 
@@ -423,7 +425,8 @@ def sum_against_lumped(bilateral: BilateralRecording, options: AnalysisOptions |
         t = stance.joints.time_s + stance.touchdown_s
         down = np.ones(t.size, bool)
         for analysis in legs.values():
-            down &= np.any([(t >= s.touchdown_s - 1e-9) & (t <= s.takeoff_s + 1e-9) for s in analysis.stances if s.joints is not None]
+            down &= np.any([(t >= s.touchdown_s - 1e-9) & (t <= s.takeoff_s + 1e-9)
+                            for s in analysis.stances if s.joints is not None]
                            or [np.zeros(t.size, bool)], axis=0)
         left_share = load_share(bilateral, t)
         sel = down & (left_share >= share[0]) & (left_share <= share[1])

@@ -63,7 +63,13 @@ from dataclasses import replace
 import numpy as np
 
 from hop_impedance.biomech.analysis import (
-    AnalysisOptions, SpanData, StanceResult, analyze_short_window, analyze_span, calibration_markers, short_window,
+    AnalysisOptions,
+    SpanData,
+    StanceResult,
+    analyze_short_window,
+    analyze_span,
+    calibration_markers,
+    short_window,
 )
 from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.biomech.kinematics import body_model_from_markers

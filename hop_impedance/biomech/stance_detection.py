@@ -174,7 +174,7 @@ class DetectorOptions:
         return td, to
 
     @classmethod
-    def from_settings(cls, settings: list[str] | None) -> "DetectorOptions":
+    def from_settings(cls, settings: list[str] | None) -> DetectorOptions:
         """Options from ``NAME=VALUE`` strings (the command line's ``--detector``); other fields keep their defaults.
 
         Raises ValueError with one line naming the bad setting and the valid names.
