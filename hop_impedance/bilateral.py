@@ -30,6 +30,7 @@ from hop_impedance.recording import (
     FORCE_TOPIC,
     MARKER_NAMES,
     MARKER_TOPIC,
+    WRENCH_TYPE,
     ForcePlateSeries,
     MarkerSeries,
     Recording,
@@ -125,7 +126,7 @@ def sum_plates(plates: dict[str, ForcePlateSeries]) -> ForcePlateSeries:
 def save_bilateral(path: str | Path, bilateral: BilateralRecording, compression: str = "zstd") -> None:
     """Write a v2 MCAP file: the v1 topics (markers with the left names added) plus one wrench topic per plate."""
     from hop_impedance.io.mcap_io import McapWriter
-    from hop_impedance.io.recording_io import FORCE_FRAME_ID, WRENCH_TYPE, write_recording_messages
+    from hop_impedance.io.recording_io import FORCE_FRAME_ID, write_recording_messages
 
     rec = bilateral.recording
     v1 = rec

@@ -23,6 +23,10 @@ MARKER_NAMES: tuple[str, ...] = ("toe", "heel", "ankle", "knee", "hip", "head")
 FORCE_TOPIC = "/force_plate/wrench"
 MARKER_TOPIC = "/mocap/markers"
 SUBJECT_TOPIC = "/subject"
+#: Their message types (``pkg/msg/Type``), as the contract and the MCAP schemas name them.
+WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
+MARKER_TYPE = "hop_impedance_msgs/msg/MarkerArray"
+SUBJECT_TYPE = "hop_impedance_msgs/msg/SubjectInfo"
 
 GRAVITY_M_S2 = 9.81
 

@@ -29,16 +29,15 @@ from hop_impedance.recording import (
     FORCE_TOPIC,
     MARKER_NAMES,
     MARKER_TOPIC,
+    MARKER_TYPE,
     SUBJECT_TOPIC,
+    SUBJECT_TYPE,
+    WRENCH_TYPE,
     ForcePlateSeries,
     MarkerSeries,
     Recording,
     Subject,
 )
-
-WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
-MARKER_TYPE = "hop_impedance_msgs/msg/MarkerArray"
-SUBJECT_TYPE = "hop_impedance_msgs/msg/SubjectInfo"
 
 FORCE_FRAME_ID = "force_plate"
 LAB_FRAME_ID = "lab"

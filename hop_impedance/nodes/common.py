@@ -32,7 +32,7 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
 
 from hop_impedance.biomech.stages import NominalPeriod
-from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC
+from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, MARKER_TYPE, SUBJECT_TOPIC, SUBJECT_TYPE, WRENCH_TYPE
 
 EVENTS_TOPIC = "/stance/events"
 STANCE_KINETICS_TOPIC = "/stance/kinetics"
@@ -46,9 +46,9 @@ DIAGNOSTICS_TOPIC = "/diagnostics"
 
 #: Every topic of the pipeline and its type (``pkg/msg/Type``), inputs first.
 TOPIC_TYPES: dict[str, str] = {
-    FORCE_TOPIC: "geometry_msgs/msg/WrenchStamped",
-    MARKER_TOPIC: "hop_impedance_msgs/msg/MarkerArray",
-    SUBJECT_TOPIC: "hop_impedance_msgs/msg/SubjectInfo",
+    FORCE_TOPIC: WRENCH_TYPE,
+    MARKER_TOPIC: MARKER_TYPE,
+    SUBJECT_TOPIC: SUBJECT_TYPE,
     EVENTS_TOPIC: "hop_impedance_msgs/msg/StanceEvent",
     STANCE_KINETICS_TOPIC: "hop_impedance_msgs/msg/StanceKinetics",
     JOINT_KINETICS_TOPIC: "hop_impedance_msgs/msg/JointKinetics",
