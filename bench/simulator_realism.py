@@ -9,7 +9,7 @@ Usage::
     .venv/bin/python bench/simulator_realism.py --seed-like       # issue 17 candidate (scenarios.seed_like_options)
 
 Every simulated figure is measured by the analysis (``hop-impedance analyze``:
-``analyze_recording`` + ``analysis_to_json``, stance detection and 2D inverse
+``analyze_recording`` + ``io.analyze_json.analysis_to_json``, stance detection and 2D inverse
 dynamics from the recorded markers and force plate, 12 Hz low-pass), not read
 from the simulator: a noise-free recording of a hard-surface trial with the
 default law (seed Table 2 k0, k1; b0 = 0.5 N m s/rad; push-off) and the seed's
@@ -27,7 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hop_impedance.biomech.analysis import analysis_to_json, analyze_recording
+from hop_impedance.biomech.analysis import analyze_recording
+from hop_impedance.io.analyze_json import analysis_to_json
 from hop_impedance.biomech.joint_angles import joint_angles
 from hop_impedance.biomech.kinematics import sagittal_markers, segment_angles_from_points
 from hop_impedance.recording import MARKER_NAMES

@@ -65,9 +65,8 @@ analysis when the kinematics are the same.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -323,33 +322,6 @@ def moments_on_common_time(analyses: dict[str, RecordingAnalysis], t_s: np.ndarr
                 m[sel, j] = np.interp(t_s[sel], ts, s.joints.moment_nm[:, j])
         out[side] = m
     return out
-
-
-def analyses_to_json(
-    analyses: dict[str, RecordingAnalysis], add_fits: Callable[[dict[str, Any], RecordingAnalysis], object] | None = None
-) -> dict[str, Any]:
-    """The ``hop-impedance analyze --per-leg`` JSON: one document, each stance tagged with its ``side``.
-
-    Each leg's part is :func:`~hop_impedance.biomech.analysis.analysis_to_json`
-    (schema docs/analyze_json.md) of that leg's analysis; ``add_fits(doc,
-    analysis)``, when given, adds the fits to it first (the CLI's
-    ``add_fits_to_json``). ``legs[side]`` holds that leg's segments (one leg's
-    foot, shank and thigh) and model structure; ``stances`` are the left leg's
-    then the right leg's, each with ``"side"``.
-    """
-    from hop_impedance.biomech.analysis import analysis_to_json
-
-    legs, stances, doc, warnings = {}, [], {}, []
-    for side, analysis in analyses.items():
-        doc = analysis_to_json(analysis)
-        if add_fits is not None:
-            add_fits(doc, analysis)
-        legs[side] = {"segments": doc["subject"]["segments"], "model_structure": doc.get("model_structure")}
-        stances += [{**stance, "side": side} for stance in doc["stances"]]
-        warnings += [w for w in doc["warnings"] if w not in warnings]  # both legs' notes (e.g. each rigid fit's)
-    subject = {k: v for k, v in doc["subject"].items() if k != "segments"}
-    return {"schema": "hop_impedance.analyze_per_leg/1", "subject": subject, "recording": doc["recording"],
-            "warnings": warnings, "legs": legs, "stances": stances}
 
 
 def load_share(bilateral: BilateralRecording, t_s: np.ndarray) -> np.ndarray:

@@ -151,7 +151,8 @@ def checked_recording(path: str, flags, cutoff_hz: float, per_leg: bool = False)
 
 def analyze_and_fit(rec, options, model_terms: list[str] | None, fit: bool = True):
     """``analyze``'s analysis of one checked recording: (RecordingAnalysis, JSON dict, per-stance fits or None)."""
-    from hop_impedance.biomech.analysis import analysis_to_json, analyze_recording
+    from hop_impedance.biomech.analysis import analyze_recording
+    from hop_impedance.io.analyze_json import analysis_to_json
 
     analysis = analyze_recording(rec, options)
     doc = analysis_to_json(analysis)
@@ -217,8 +218,9 @@ def _analyze_path(path: str, args: argparse.Namespace, options, terms: list[str]
     import sys
     from dataclasses import replace
 
-    from hop_impedance.biomech.per_leg import analyses_to_json, analyze_legs
+    from hop_impedance.biomech.per_leg import analyze_legs
     from hop_impedance.impedance.report import fit_records
+    from hop_impedance.io.analyze_json import analyses_to_json
 
     rec, bilateral = checked_recording(path, args, min(options.marker_cutoff_hz, options.force_cutoff_hz), args.per_leg)
     for warning in rec.warnings:
