@@ -755,7 +755,7 @@ def _flight_to_next_touchdown(chain: Chain, config: HoppingConfig, law: Impedanc
                           float(-v_next[1]), rates, not_placed)
 
 
-def leg_stiffness_n_m(chain: Chain, stance: StanceSimulation) -> tuple[float, float, float]:
+def leg_stiffness_n_per_m(chain: Chain, stance: StanceSimulation) -> tuple[float, float, float]:
     """Seed 001's leg stiffness: peak vertical GRF / maximal leg compression.
 
     Leg compression is the COM's downward displacement since touchdown minus the

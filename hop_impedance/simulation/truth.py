@@ -42,7 +42,7 @@ from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.recording import Subject
 from hop_impedance.simulation.energy_budget import law_part, part_moments_nm, trial_energy_budget
-from hop_impedance.simulation.hopping_trial import HoppingTrial, StanceRecord, leg_stiffness_n_m, simulate_resample
+from hop_impedance.simulation.hopping_trial import HoppingTrial, StanceRecord, leg_stiffness_n_per_m, simulate_resample
 from hop_impedance.simulation.impedance_laws import COEFFICIENT_NAMES, Eq3Law, PushOff
 from hop_impedance.simulation.sensors import SensorConfig, sample_times_s, stamps_ns
 
@@ -65,7 +65,7 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
     t_all = sample_times_s(trial.t_end_s, rate)
     t_in = t_all[(t_all >= rec.t_touchdown_s) & (t_all <= rec.t_takeoff_s)]
     st = simulate_resample(trial.chain, rec, t_in - rec.t_touchdown_s)
-    k_leg, peak, compression = leg_stiffness_n_m(trial.chain, rec.stance)
+    k_leg, peak, compression = leg_stiffness_n_per_m(trial.chain, rec.stance)
     eq3 = law_part(rec.law, Eq3Law)
     push = law_part(rec.law, PushOff)
     impedance = {}
@@ -87,7 +87,7 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
         "friction_phases": [[float(t), int(sign)] for t, sign in rec.stance.friction_phases],
         "peak_grf_n": peak,
         "peak_grf_bw": peak / weight_n,
-        "leg_stiffness_n_m": k_leg,
+        "leg_stiffness_n_m": k_leg,  # N/m; the key's unit suffix is kept so truth/1 files read the same
         "leg_compression_m": compression,
         "impedance": impedance,
         "activation": None if eq3 is None or eq3.activation is None else vars(eq3.activation).copy(),

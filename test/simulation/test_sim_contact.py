@@ -110,7 +110,7 @@ def test_seed_like_hopper_keeps_seed_001_directions_on_an_unexpected_hard_surfac
     from hop_impedance.simulation.ground import HARD, SOFT
     from hop_impedance.simulation.hopping_trial import (
         calibrate,
-        leg_stiffness_n_m,
+        leg_stiffness_n_per_m,
         scale_push_off,
         touchdown_posture,
         touchdown_state,
@@ -126,7 +126,7 @@ def test_seed_like_hopper_keeps_seed_001_directions_on_an_unexpected_hard_surfac
     td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
     kw = {"friction_coefficient": cfg.friction_coefficient, "trunk_balance": cfg.trunk_balance}
     soft_stance, hard_stance = simulate_stance(chain, law, SOFT, td, **kw), simulate_stance(chain, law, HARD, td, **kw)
-    soft, hard = leg_stiffness_n_m(chain, soft_stance), leg_stiffness_n_m(chain, hard_stance)
+    soft, hard = leg_stiffness_n_per_m(chain, soft_stance), leg_stiffness_n_per_m(chain, hard_stance)
     assert hard[0] < 0.99 * soft[0] and hard[2] > soft[2] and hard[1] > soft[1]
     extra = (np.max(hard_stance.rho_rad, axis=0) - hard_stance.rho_rad[0]) - (
         np.max(soft_stance.rho_rad, axis=0) - soft_stance.rho_rad[0])

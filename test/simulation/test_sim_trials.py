@@ -12,7 +12,7 @@ from hop_impedance.recording import MARKER_NAMES
 from hop_impedance.simulation.ground import HARD, SOFT
 from hop_impedance.simulation.hopping_trial import (
     calibrate,
-    leg_stiffness_n_m,
+    leg_stiffness_n_per_m,
     scale_push_off,
     simulate_hopping,
     touchdown_posture,
@@ -97,7 +97,7 @@ def test_unexpected_hard_surface_lowers_leg_stiffness_as_in_seed_001():
     law = scale_push_off(cfg.law, cal.push_scale)
     td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
     soft_stance, hard_stance = simulate_stance(chain, law, SOFT, td), simulate_stance(chain, law, HARD, td)
-    soft, hard = leg_stiffness_n_m(chain, soft_stance), leg_stiffness_n_m(chain, hard_stance)
+    soft, hard = leg_stiffness_n_per_m(chain, soft_stance), leg_stiffness_n_per_m(chain, hard_stance)
     assert hard[0] < 0.97 * soft[0]  # lower leg stiffness ...
     assert hard[2] > soft[2]  # ... from larger leg compression
     assert hard[1] > soft[1]  # while the peak force is higher (seed 001, Fig. 4A)
