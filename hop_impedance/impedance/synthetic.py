@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
+from hop_impedance.biomech.filtering import DEFAULT_CUTOFF_HZ
 from hop_impedance.seed_tables import FREQUENCIES_HZ, JOINTS, RANGE_OF_FLEXION_RAD, STANCE_TIME_S, eq10_k0_k1
 
 #: Seed Table 2 (mean values): frequency (Hz) -> joint -> (k0, k1) in N m/rad (:mod:`hop_impedance.seed_tables`).
@@ -119,7 +120,7 @@ def synthetic_stance(
     b0: float = 0.5,
     m0: float = 0.0,
     coefficient_scale: float = 1.0,
-    cutoff_hz: float = 12.0,
+    cutoff_hz: float = DEFAULT_CUTOFF_HZ,
 ) -> SyntheticStance:
     """A stance of ``joint`` at one of the seed's hopping frequencies.
 

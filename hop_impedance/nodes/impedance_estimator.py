@@ -98,10 +98,11 @@ class ImpedanceEstimatorNode(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("impedance_estimator", **kwargs)
         diag = declare(self, "diagnostics_period_s", 1.0, "publish /diagnostics this often (s); 0 = never")
-        cutoff = declare(self, "cutoff_hz", 12.0,
-                         "low-pass cut-off the joint data were filtered with (Hz): the fit's noise bandwidth")
         from hop_impedance.biomech.analysis import AnalysisOptions
 
+        # the same default as inverse_dynamics' (the analysis' one); set both together (config/pipeline.yaml)
+        cutoff = declare(self, "cutoff_hz", AnalysisOptions().marker_cutoff_hz,
+                         "low-pass cut-off the joint data were filtered with (Hz): the fit's noise bandwidth")
         self.options = default_fit_options(AnalysisOptions(marker_cutoff_hz=cutoff, force_cutoff_hz=cutoff))
         d = PlausibilityBounds()
         self.bounds = PlausibilityBounds(

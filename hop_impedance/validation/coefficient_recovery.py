@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from hop_impedance.biomech.filtering import DEFAULT_CUTOFF_HZ
+
 JOINTS = ("ankle", "knee", "hip")
 #: The fitted structure: the simulated law is K = k0 + k1 (rho - rho0), B = b0.
 LAW_TERMS = ("k0", "k1", "b0")
@@ -100,7 +102,7 @@ def recover_trial(
     folder: Path,
     *,
     n_hops: int = 4,
-    cutoff_hz: float = 12.0,
+    cutoff_hz: float = DEFAULT_CUTOFF_HZ,
     edge_s: float = 0.0,
     skip_first: int = 0,
     trial=None,
