@@ -284,12 +284,22 @@ def _analyze_fitted(rec: Recording, markers: MarkerSeries, model: BodyModel, opt
 def analyze_legs(bilateral: BilateralRecording, options: AnalysisOptions | None = None,
                  rigid: bool = True) -> dict[str, RecordingAnalysis]:
     """:func:`analyze_leg` for both sides, ``{"left": ..., "right": ...}``."""
+    _require_bilateral(bilateral)
+    return {side: analyze_leg(bilateral, side, options, rigid) for side in SIDES}
+
+
+def _require_bilateral(bilateral: BilateralRecording) -> None:
+    """A one-line ValueError unless the recording has both plates, both legs' markers and a subject."""
+    source = bilateral.recording.source or "recording"
     if not bilateral.is_bilateral:
         raise ValueError(
-            f"{bilateral.recording.source or 'recording'}: per-leg analysis needs contract v2 "
+            f"{source}: per-leg analysis needs contract v2 "
             "(one wrench topic per plate and both legs' markers); this is a v1 recording: use the lumped analysis"
         )
-    return {side: analyze_leg(bilateral, side, options, rigid) for side in SIDES}
+    if bilateral.recording.markers is None:
+        raise ValueError(f"{source}: no markers on /mocap/markers for the right leg")
+    if bilateral.recording.subject is None:
+        raise ValueError(f"{source}: no /subject message; give the subject's mass and height")
 
 
 def fit_legs(
@@ -350,14 +360,14 @@ def mean_leg_analysis(bilateral: BilateralRecording, options: AnalysisOptions | 
     body model is scaled from the mean measured markers by the lumped rule.
     """
     options = options or AnalysisOptions()
+    _require_bilateral(bilateral)
     rec = bilateral.recording
     left, right = bilateral.markers("left"), bilateral.markers("right")
-    # a bilateral recording with a subject: sum_against_lumped runs analyze_legs, which checks both, first
-    assert left is not None and right is not None
+    assert left is not None and right is not None  # is_bilateral: both legs' markers
     mean = MarkerSeries(right.stamp_ns, right.names, (left.positions_m + right.positions_m) / 2)
     model = options.body_model
     if model is None:
-        assert rec.subject is not None
+        assert rec.subject is not None  # _require_bilateral
         model = body_model_from_markers(rec.subject, calibration_markers(mean, options.calibration_s), options.overrides)
     if not rigid:
         return analyze_recording(replace(rec, markers=mean), replace(options, body_model=model))

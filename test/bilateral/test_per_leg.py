@@ -160,3 +160,19 @@ def test_rigid_fit_keeps_the_gap_rules(bilateral, gap_s):
     assert (verdicts[True] is None) == (gap_s < 0.1)
     if gap_s > 0.1:
         assert "knee" in verdicts[True]
+
+
+@pytest.mark.parametrize("broken", ["v1", "no subject", "no right markers"])
+def test_per_leg_entry_points_refuse_bad_input_in_one_line(bilateral, broken):
+    """analyze_legs and mean_leg_analysis (the lumped reference of the per-leg check) name what is missing in a
+    one-line ValueError instead of failing inside (mean_leg_analysis used to end in an assertion)."""
+    if broken == "v1":
+        bad, words = replace(bilateral, left_markers=None), "per-leg analysis needs contract v2"
+    elif broken == "no subject":
+        bad, words = replace(bilateral, recording=replace(bilateral.recording, subject=None)), "no /subject message"
+    else:
+        bad, words = replace(bilateral, recording=replace(bilateral.recording, markers=None)), "no markers"
+    for call in (analyze_legs, mean_leg_analysis):
+        with pytest.raises(ValueError, match=words) as err:
+            call(bad)
+        assert "\n" not in str(err.value)
