@@ -254,8 +254,12 @@ class ReorderBuffer(Generic[_Item]):
         self.released_ns: int | None = None
         self.dropped = 0
         self.duplicates = 0
-        self.period_ns: int | None = None
         self._period = NominalPeriod()
+
+    @property
+    def period_ns(self) -> int | None:
+        """The nominal period (ns), or None until it is learnt."""
+        return None if self._period.value is None else int(self._period.value)
 
     def add(self, ns: int, item: _Item) -> bool:
         if self.released_ns is not None and ns <= self.released_ns:
@@ -280,12 +284,12 @@ class ReorderBuffer(Generic[_Item]):
         n = 0
         while n < len(self.items) and self.items[n][0] <= limit:
             n += 1
-        if self.period_ns is None:
+        if self._period.value is None:
             self._period.update(np.array([x[0] for x in self.items[:n]], dtype=np.int64))
-            self.period_ns = None if self._period.value is None else int(self._period.value)
-        if self.period_ns is not None:
+        period_ns = self.period_ns
+        if period_ns is not None:
             last = self.items[n - 1][0] if n else self.released_ns
-            max_step = self.period_ns * 3 // 2
+            max_step = period_ns * 3 // 2
             while n < len(self.items) and last is not None and self.items[n][0] - last <= max_step:
                 last = self.items[n][0]
                 n += 1
