@@ -607,11 +607,6 @@ def _balanced_com_ahead(hop: _CalibrationHop, speed: float, scale: float,
     return com_ahead, vx0, vx1
 
 
-def calibrated_rates(calibration: HopCalibration) -> np.ndarray:
-    """Touchdown segment rates (rad/s, shape (4,)) stored by :func:`calibrate`."""
-    return np.array(calibration.touchdown_rates_rad_s, float)
-
-
 def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> HoppingTrial:
     """Simulate ``config.n_hops`` hops; seeded hop-to-hop variability.
 
@@ -627,7 +622,7 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
     notes = [] if cal.success else [_calibration_note(config, cal)]
     period = 1.0 / config.freq_hz
     q_td = touchdown_posture(chain, rho_nom, cal.com_ahead_m)
-    td_rates = calibrated_rates(cal)
+    td_rates = np.array(cal.touchdown_rates_rad_s, float)
     rates: np.ndarray | None = td_rates
     speed = cal.speed_m_s
     t_td = config.lead_in_s
