@@ -83,7 +83,7 @@ def _compare(a, b, path: str, ignore: set[str], rtol: float, stats: dict) -> lis
     numbers = (int, float)
     if isinstance(a, numbers) and isinstance(b, numbers) and not isinstance(a, bool) and not isinstance(b, bool):
         stats["n"] += 1
-        if (a is None) or (isinstance(a, float) and math.isnan(a) and isinstance(b, float) and math.isnan(b)):
+        if isinstance(a, float) and math.isnan(a) and isinstance(b, float) and math.isnan(b):
             return []
         scale = max(abs(a), abs(b))
         rel = 0.0 if a == b else abs(a - b) / scale

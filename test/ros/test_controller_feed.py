@@ -17,10 +17,10 @@ values at once (NaN, pool emptied), and neither a stance that touched down
 before the new subject nor one analysed for another body mass becomes valid.
 """
 
+import functools
 import math
 import time
 
-import numpy as np
 import pytest
 
 rclpy = pytest.importorskip("rclpy")
@@ -55,6 +55,14 @@ def _subject(subject_id: str, mass: float, height: float, stamp_ns_: int = 0) ->
     return msg
 
 
+def _spin_until(executor, predicate, timeout_s: float = 30.0) -> bool:
+    """Spin until ``predicate()`` holds or ``timeout_s`` has passed; returns ``predicate()``."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and not predicate():
+        executor.spin_once(timeout_sec=0.02)
+    return predicate()
+
+
 def _direct_pool(values: list[float], errors: list[float]) -> tuple[float, float, float]:
     """Inverse-variance weighted mean, its standard error and Cochran's Q / (n - 1), written out (not the pooling module)."""
     w = [1.0 / (e * e) for e in errors]
@@ -85,11 +93,7 @@ def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
         executor.add_node(estimator)
         executor.add_node(tester)
 
-        def spin_until(predicate, timeout_s=30.0):
-            deadline = time.monotonic() + timeout_s
-            while time.monotonic() < deadline and not predicate():
-                executor.spin_once(timeout_sec=0.02)
-            return predicate()
+        spin_until = functools.partial(_spin_until, executor)
 
         def late_controller() -> ControllerImpedance:
             """What a controller that subscribes now (reliable, transient-local) receives first."""
@@ -227,22 +231,19 @@ def test_first_subject_after_the_first_stance(stances, mass_offset_kg):
         executor.add_node(estimator)
         executor.add_node(tester)
 
-        def spin_for(seconds, predicate=lambda: False):
-            deadline = time.monotonic() + seconds
-            while time.monotonic() < deadline and not predicate():
-                executor.spin_once(timeout_sec=0.02)
+        spin_until = functools.partial(_spin_until, executor)
 
-        spin_for(30.0, lambda: len(feeds) >= 1)  # the start message
+        assert spin_until(lambda: len(feeds) >= 1)  # the start message
         msg = msgs[0]
         msg.takeoff_received_ns = time.time_ns()
         pub_stance.publish(msg)
-        spin_for(30.0, lambda: any(stamp_ns(f.takeoff_stamp) for f in feeds))
+        assert spin_until(lambda: any(stamp_ns(f.takeoff_stamp) for f in feeds))
         first = [f for f in feeds if stamp_ns(f.takeoff_stamp)]
         assert len(first) == 1 and any(first[0].valid) and first[0].subject_id == ""
         n = len(feeds)
         pub_subject.publish(_subject(subject.subject_id, subject.body_mass_kg + mass_offset_kg, subject.body_height_m))
-        spin_for(30.0, lambda: estimator.subject_key is not None)
-        spin_for(1.0)  # anything the subject caused has arrived by now
+        assert spin_until(lambda: estimator.subject_key is not None)
+        spin_until(lambda: False, 1.0)  # anything the subject caused has arrived by now
         assert estimator.feed.subject_id == subject.subject_id
         if mass_offset_kg == 0.0:
             # the same body mass the stance was analysed for: nothing to withdraw, nothing republished
