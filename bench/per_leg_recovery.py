@@ -43,9 +43,8 @@ import time
 import numpy as np
 
 from hop_impedance.validation.bilateral_recovery import recover_legs
-from hop_impedance.validation.coefficient_recovery import JOINTS, RecoveryResult
+from hop_impedance.validation.coefficient_recovery import JOINTS, RecoveryResult, median_interval
 
-N_BOOT = 2000
 HIP = 2
 
 
@@ -83,13 +82,6 @@ def hip_moment_check(freq_hz: dict[str, float], seed: int, hops: int) -> None:
             lumped_peak = np.max(np.abs(stance.joints.moment_nm[:, HIP]))
             print(f"{line}; |2 x per-leg (measured) - lumped| max {100 * np.nanmax(np.abs(diff)) / lumped_peak:.3f} %"
                   f" (take-off {1000 * (measured.takeoff_s - stance.takeoff_s):+.1f} ms)")
-
-
-def median_interval(values: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Median over axis 0 of ``values`` (n, k) and its 95 % bootstrap interval (lo, hi)."""
-    boot = np.median(values[rng.integers(0, len(values), (N_BOOT, len(values)))], axis=1)
-    lo, hi = np.percentile(boot, [2.5, 97.5], axis=0)
-    return np.median(values, axis=0), lo, hi
 
 
 def main() -> None:

@@ -29,6 +29,16 @@ from hop_impedance.biomech.filtering import DEFAULT_CUTOFF_HZ
 JOINTS = ("ankle", "knee", "hip")
 #: The fitted structure: the simulated law is K = k0 + k1 (rho - rho0), B = b0.
 LAW_TERMS = ("k0", "k1", "b0")
+#: Bootstrap resamples of :func:`median_interval`.
+N_BOOT = 2000
+
+
+def median_interval(values: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Median over axis 0 of ``values`` (n, k) and its 95 % bootstrap interval (lo, hi): ``N_BOOT`` resamples
+    of the rows (stances) with replacement, percentiles 2.5 and 97.5 of their medians."""
+    boot = np.median(values[rng.integers(0, len(values), (N_BOOT, len(values)))], axis=1)
+    lo, hi = np.percentile(boot, [2.5, 97.5], axis=0)
+    return np.median(values, axis=0), lo, hi
 
 
 @dataclass
