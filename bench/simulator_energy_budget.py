@@ -22,20 +22,21 @@ Push-off timing is printed as fractions of the actual stance: onset, peak and
 end of the sin^2 pulse, and the instant of maximal ankle flexion.
 
 Usage: .venv/bin/python bench/simulator_energy_budget.py [--hops 5] [--freqs 1.53,1.87,2.2]
-       [--flights prescribed,energy_keeping] [--trunk K] [--write] [--lossless [--seed-like]]
+       [--flights prescribed,energy_keeping] [--trunk K] [--write]
+       [--lossless [--seed-like [--balance active|fixed|hip_spring]] [--periodic]]
 (``--write`` also writes docs/simulator_energy.md; ``--trunk K`` adds a trunk-balance moment of
 stiffness K N m/rad; ``--lossless`` runs issue 17's passive test instead: no damping, no push-off,
-lossless surface, per hop stance time and COM apex, hop N against hop 3.)
+lossless surface, per hop stance time, COM apex and energy by component, hop N against hop 3;
+``--balance`` chooses how the trunk is held, ``--periodic`` adds the periodic hop and its eigenvalues.)
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 import numpy as np
-
-import dataclasses
 
 from hop_impedance.simulation.energy_budget import trial_energy_budget
 from hop_impedance.simulation.hopping_trial import push_off_part, simulate_hopping
@@ -65,37 +66,118 @@ def trial_budget(freq_hz: float, hops: int, flight: str = "prescribed", trunk: f
     return [r for r in rows if "flight_j" in r], trial.stop_reason
 
 
-def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str, seed_like: bool = False) -> str:
-    """Issue 17's passive test: no damping, no push-off, lossless hard surface, no sliding; per hop the stance
-    time and the COM apex height of the following flight, and how hop ``hops`` compares with hop 3.
-    ``seed_like``: with scenarios.seed_like_options (toe-tip contact, its posture and trunk balance)."""
-    from hop_impedance.simulation.dynamics import body_com, com_velocity
+#: ``--balance`` choices of the lossless trial with ``--seed-like`` (how the trunk is held).
+BALANCES = ("active", "fixed", "hip_spring")
+
+
+def lossless_config(freq_hz: float, hops: int, trunk: float, flight: str, seed_like: bool = False,
+                    balance: str = "active"):
+    """(chain, config) of issue 17's passive test: no damping, no push-off, lossless hard surface, no sliding.
+
+    ``seed_like``: scenarios.seed_like_options (toe-tip contact, its posture) with the trunk held by
+    ``balance``: ``active`` scenarios.TRUNK_BALANCE (a moment on the trunk's pitch about its touchdown
+    value), ``fixed`` the same about the nominal touchdown pitch (a reference that does not move with the
+    foot placement), ``hip_spring`` a hip spring of scenarios.HIP_TRUNK_SPRING_NM_RAD (conservative).
+    """
     from hop_impedance.simulation.ground import HARD, lossless
-    from hop_impedance.simulation.scenarios import Effects, seed_like_options
+    from hop_impedance.simulation.hopping_trial import touchdown_posture
+    from hop_impedance.simulation.scenarios import HIP_TRUNK_SPRING_NM_RAD, Effects, seed_like_options
 
     options = {"trunk_balance": TrunkBalance(trunk) if trunk else None}
     if seed_like:
         options = {k: v for k, v in seed_like_options().items() if k != "push_timing"}
+        if balance == "hip_spring":
+            options = {**options, "trunk_balance": None, "hip_trunk_spring_nm_rad": HIP_TRUNK_SPRING_NM_RAD}
     chain, config = hopping_config(freq_hz, "hard", hops, Effects(damping=False, push_off=False), variability=False,
                                    flight=flight, **options)
     config = dataclasses.replace(config, surface=lossless(HARD), friction_coefficient=None)
+    if seed_like and balance == "fixed":
+        q4 = float(touchdown_posture(chain, np.asarray(config.touchdown_rho_rad), config.com_ahead_m)[3])
+        config = dataclasses.replace(config, trunk_balance=dataclasses.replace(config.trunk_balance, reference_rad=q4))
+    return chain, config
+
+
+def hop_energy_parts(chain, rec) -> dict:
+    """Energy of one hop by component (J): COM (translation + gravity) and segment rotation about the COM
+    at touchdown and take-off, joint springs at take-off, trunk-balance work split into its spring and
+    damper terms, ground work."""
+    from hop_impedance.simulation.dynamics import body_com, com_velocity, internal_kinetic_energy_j
+    from hop_impedance.simulation.energy_budget import DEFAULT_DT_S, stance_energy_budget
+    from hop_impedance.simulation.hopping_trial import simulate_resample
+
+    st, m, g_acc = rec.stance, chain.total_mass_kg, chain.gravity_m_s2
+
+    def com_and_segments(g, gd):
+        v = com_velocity(chain, g, gd)
+        return 0.5 * m * float(v @ v) + m * g_acc * body_com(chain, g)[1], internal_kinetic_energy_j(chain, g[2:], gd[2:])
+
+    budget = stance_energy_budget(chain, rec)
+    (com_td, seg_td), (com_to, seg_to) = com_and_segments(st.g[0], st.gd[0]), com_and_segments(st.g[-1], st.gd[-1])
+    spring_j = damper_j = 0.0
+    tb = st.trunk_balance
+    if tb is not None:
+        t = np.append(np.arange(0.0, st.duration_s, DEFAULT_DT_S), st.duration_s)
+        dense = simulate_resample(chain, rec, t)
+        ref = rec.touchdown.g[5] if tb.reference_rad is None else tb.reference_rad
+        omega_hip = dense.omega_rad_s[:, 2]
+        spring_j = float(np.trapezoid(tb.stiffness_nm_rad * (dense.g[:, 5] - ref) * omega_hip, t))
+        damper_j = float(np.trapezoid(tb.damping_nm_s_rad * dense.gd[:, 5] * omega_hip, t))
+    return {"e_touchdown_j": budget["e_touchdown_j"], "com_td_j": com_td, "segments_td_j": seg_td, "com_to_j": com_to,
+            "segments_to_j": seg_to, "springs_to_j": budget["springs_left_j"] or 0.0, "trunk_spring_j": spring_j,
+            "trunk_damper_j": damper_j, "ground_j": budget["ground_j"]}
+
+
+def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str, seed_like: bool = False,
+                  balance: str = "active", periodic: bool = False) -> str:
+    """Issue 17's passive test (:func:`lossless_config`); per hop the stance time, the COM apex height of the
+    following flight and the energy by component (:func:`hop_energy_parts`), and how hop ``hops`` compares
+    with hop 3. ``periodic``: also the periodic hop nearest the calibrated one and its eigenvalues."""
+    from hop_impedance.simulation.dynamics import body_com, com_velocity
+
+    chain, config = lossless_config(freq_hz, hops, trunk, flight, seed_like, balance)
+    setup = f"seed-like options, {balance} trunk balance" if seed_like else f"trunk {trunk:g} N m/rad"
     try:
         trial = simulate_hopping(chain, config, seed=1)
     except ValueError as exc:
-        return f"{flight}, {freq_hz} Hz, {'seed-like options' if seed_like else f'trunk {trunk:g}'}: no trial ({exc})"
-    rows = []
+        return f"{flight}, {freq_hz} Hz, {setup}: no trial ({exc})"
+    rows, parts = [], []
+    lines = [f"{flight}, {freq_hz} Hz, {setup}: {len(trial.stances)} hops"
+             + (f" (stopped: {trial.stop_reason})" if trial.stop_reason else ""),
+             "  energy (J): E at touchdown; COM (translation + gravity) and segment rotation about the COM at "
+             "touchdown -> take-off; joint springs at take-off; trunk-balance work, spring / damper term; ground"]
     for rec in trial.stances:
         g, gd = rec.stance.g[-1], rec.stance.gd[-1]
         vz = com_velocity(chain, g, gd)[1]
-        rows.append((rec.stance.duration_s, body_com(chain, g)[1] + max(vz, 0.0) ** 2 / (2 * chain.gravity_m_s2)))
-    setup = "seed-like options" if seed_like else f"trunk {trunk:g} N m/rad"
-    lines = [f"{flight}, {freq_hz} Hz, {setup}: {len(rows)} hops"
-             + (f" (stopped: {trial.stop_reason})" if trial.stop_reason else "")]
-    lines += [f"  hop {i + 1}: stance {1000 * ts:.1f} ms, COM apex {apex:.4f} m" for i, (ts, apex) in enumerate(rows)]
+        apex = body_com(chain, g)[1] + max(vz, 0.0) ** 2 / (2 * chain.gravity_m_s2)
+        rows.append((rec.stance.duration_s, apex))
+        e = hop_energy_parts(chain, rec)
+        parts.append(e)
+        lines.append(f"  hop {rec.index + 1}: stance {1000 * rec.stance.duration_s:.1f} ms, COM apex {apex:.4f} m | "
+                     f"E {e['e_touchdown_j']:.2f}; COM {e['com_td_j']:.2f} -> {e['com_to_j']:.2f}, segments "
+                     f"{e['segments_td_j']:.2f} -> {e['segments_to_j']:.2f}; springs {e['springs_to_j']:.2f}; trunk "
+                     f"{e['trunk_spring_j']:+.2f} / {e['trunk_damper_j']:+.2f}; ground {e['ground_j']:+.3f}")
     if len(rows) >= 4:
         (ts3, a3), (tsn, an) = rows[2], rows[-1]
         lines.append(f"  hop {len(rows)} vs hop 3: stance {tsn / ts3 - 1:+.1%}, apex {an / a3 - 1:+.2%}")
+    trunk_j = sum(e["trunk_spring_j"] + e["trunk_damper_j"] for e in parts[:-1])
+    lines.append(f"  E at touchdown, hop {len(parts)} - hop 1: {parts[-1]['e_touchdown_j'] - parts[0]['e_touchdown_j']:+.3f} J; "
+                 f"trunk-balance work over hops 1-{len(parts) - 1}: {trunk_j:+.3f} J")
+    if periodic:
+        lines.append(periodic_line(chain, config, trial.calibration))
     return "\n".join(lines)
+
+
+def periodic_line(chain, config, cal) -> str:
+    """The periodic hop nearest the calibrated touchdown state (simulation/periodic_hop.py) and its stability."""
+    from hop_impedance.simulation.periodic_hop import periodic_hop, touchdown_vector
+
+    ph = periodic_hop(chain, config, cal,
+                      touchdown_vector(cal.speed_m_s, 0.0, cal.com_ahead_m, cal.touchdown_rates_rad_s))
+    state = ", ".join(f"{v:.4f}" for v in ph.state)
+    moduli = ", ".join(f"{abs(v):.3f}" for v in ph.eigenvalues)
+    return (f"  periodic hop ({'found' if ph.success else 'NOT found'}: max |P(x) - x| {abs(ph.residual).max():.1e}): "
+            f"touchdown state [speed, vx, COM ahead, rates q1..q4] = [{state}], stance {1000 * ph.stance_s:.1f} ms, "
+            f"flight {1000 * ph.flight_s:.1f} ms ({1 / (ph.stance_s + ph.flight_s):.3f} Hz); |eigenvalues| {moduli}")
 
 
 def main() -> None:
@@ -109,11 +191,16 @@ def main() -> None:
                         help="instead: the passive lossless trial (no damping, push-off or ground loss) hop by hop")
     parser.add_argument("--seed-like", action="store_true",
                         help="with --lossless: scenarios.seed_like_options (toe-tip contact, posture, trunk balance)")
+    parser.add_argument("--balance", choices=BALANCES, default="active",
+                        help="with --lossless --seed-like: how the trunk is held (lossless_config)")
+    parser.add_argument("--periodic", action="store_true",
+                        help="with --lossless: also find the periodic hop and its eigenvalues (simulation/periodic_hop.py)")
     args = parser.parse_args()
     if args.lossless:
         for flight in args.flights.split(","):
             for freq in (float(f) for f in args.freqs.split(",")):
-                print(lossless_hops(freq, args.hops, args.trunk, flight, args.seed_like), flush=True)
+                print(lossless_hops(freq, args.hops, args.trunk, flight, args.seed_like, args.balance, args.periodic),
+                      flush=True)
         return
     lines = ["| flight | frequency (Hz) | push-off work | damping | springs left at take-off | ground | trunk | flight | "
              "stance balance residual |", "|---|---|---|---|---|---|---|---|---|"]

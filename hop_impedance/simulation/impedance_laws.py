@@ -294,10 +294,15 @@ class TrunkBalance:
         k (N m/rad), >= 0.
     damping_nm_s_rad : float
         b (N m s/rad), >= 0.
+    reference_rad : float or None
+        A fixed trunk angle q4_ref (rad) used instead of each stance's touchdown q4 (issue 17's
+        lossless trial: a reference that does not move with the foot placement); None (default):
+        the touchdown q4.
     """
 
     stiffness_nm_rad: float
     damping_nm_s_rad: float = 0.0
+    reference_rad: float | None = None
 
     def __post_init__(self) -> None:
         if not (self.stiffness_nm_rad >= 0 and self.damping_nm_s_rad >= 0):
@@ -306,11 +311,16 @@ class TrunkBalance:
 
     def hip_moment_nm(self, q4_rad, q4_rate_rad_s, q4_touchdown_rad: float):
         """Balance moment at the hip (N m, extensor positive), shape of ``q4_rad``."""
-        return (-self.stiffness_nm_rad * (np.asarray(q4_rad, float) - q4_touchdown_rad)
+        ref = q4_touchdown_rad if self.reference_rad is None else self.reference_rad
+        return (-self.stiffness_nm_rad * (np.asarray(q4_rad, float) - ref)
                 - self.damping_nm_s_rad * np.asarray(q4_rate_rad_s, float))
 
     def to_dict(self) -> dict:
         """Parameters for the truth file."""
+        if self.reference_rad is None:
+            return {"type": "trunk_balance", "stiffness_nm_rad": self.stiffness_nm_rad,
+                    "damping_nm_s_rad": self.damping_nm_s_rad,
+                    "law": "M_hip += -k (q4 - q4_touchdown) - b dq4/dt (q4: HAT absolute angle)"}
         return {"type": "trunk_balance", "stiffness_nm_rad": self.stiffness_nm_rad,
-                "damping_nm_s_rad": self.damping_nm_s_rad,
-                "law": "M_hip += -k (q4 - q4_touchdown) - b dq4/dt (q4: HAT absolute angle)"}
+                "damping_nm_s_rad": self.damping_nm_s_rad, "reference_rad": self.reference_rad,
+                "law": "M_hip += -k (q4 - reference) - b dq4/dt (q4: HAT absolute angle)"}

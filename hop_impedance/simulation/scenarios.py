@@ -60,6 +60,12 @@ ACTIVATION = TimeActivation(a_min=0.3, tau_s=0.04)
 #: trunk stays near its touchdown inclination; 40 N m s/rad damps its pitch (critical damping of the
 #: HAT about the hip with I ~ 1.45 + 31.9 x 0.38^2 ~ 6 kg m^2 would be 2 sqrt(800 x 6) ~ 140).
 TRUNK_BALANCE = TrunkBalance(800.0, 40.0)
+#: Issue 17's lossless trial: the trunk held by a hip spring of the same 800 N m/rad instead (N m/rad;
+#: :func:`hopping_config`'s ``hip_trunk_spring_nm_rad``). A moment at the hip is conservative only as a
+#: function of the hip angle (any potential whose moments act at the hip alone depends on q4 - q3), so
+#: :data:`TRUNK_BALANCE`, a moment on the trunk's absolute pitch q4, does work on the thigh that no
+#: potential returns (bench/simulator_energy_budget.py --lossless measures it per hop).
+HIP_TRUNK_SPRING_NM_RAD = 800.0
 
 
 def toe_tip_ahead_m(subject: Subject = SEED_SUBJECT) -> float:
@@ -136,9 +142,12 @@ def seed_stiffness(freq_hz: float) -> tuple[np.ndarray, np.ndarray]:
             np.array([np.interp(f, freqs, k1[:, j]) for j in range(3)]))
 
 
-def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_duration_s: float) -> ImpedanceLaw:
-    """The joint law for a frequency with the chosen effects."""
+def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_duration_s: float,
+              hip_trunk_spring_nm_rad: float = 0.0) -> ImpedanceLaw:
+    """The joint law for a frequency with the chosen effects (``hip_trunk_spring_nm_rad`` is added to the
+    hip's k0: :data:`HIP_TRUNK_SPRING_NM_RAD`)."""
     k0, k1 = seed_stiffness(freq_hz)
+    k0 = k0 + np.array([0.0, 0.0, hip_trunk_spring_nm_rad])
     eq3 = Eq3Law(
         k0=k0,
         k1=k1 if effects.angle_dependent_stiffness else np.zeros(3),
@@ -179,6 +188,7 @@ def hopping_config(
     flight: str = "prescribed",
     contact_ahead_m: float = 0.0,
     push_timing: tuple[float, float] = PUSH_OFF_TIMING,
+    hip_trunk_spring_nm_rad: float = 0.0,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
@@ -192,12 +202,16 @@ def hopping_config(
     moves the ground contact that far in front of the toe marker
     (:func:`~hop_impedance.simulation.dynamics.contact_ahead_of_toe_marker`; e.g.
     :data:`TOE_TIP_AHEAD_M`, the seed's hinge at the tip of the toe; default 0, the marker).
+    ``hip_trunk_spring_nm_rad`` (e.g. :data:`HIP_TRUNK_SPRING_NM_RAD`) holds the trunk by a hip spring
+    about the touchdown hip angle, added to the Table 2 hip k0 (so the truth file's hip law is the whole
+    hip law): the conservative alternative to ``trunk_balance`` (default 0, none).
     """
     chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
     expected = surface(calibration_surface or surface_name)
-    passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0)
+    passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0,
+                        hip_trunk_spring_nm_rad)
     ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
-    law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts)
+    law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts, hip_trunk_spring_nm_rad)
     config = HoppingConfig(
         freq_hz=freq_hz,
         n_hops=n_hops,
