@@ -71,13 +71,14 @@ BALANCES = ("active", "fixed", "hip_spring")
 
 
 def lossless_config(freq_hz: float, hops: int, trunk: float, flight: str, seed_like: bool = False,
-                    balance: str = "active"):
+                    balance: str = "active", posture_sd_rad: float = 0.0):
     """(chain, config) of issue 17's passive test: no damping, no push-off, lossless hard surface, no sliding.
 
     ``seed_like``: scenarios.seed_like_options (toe-tip contact, its posture) with the trunk held by
     ``balance``: ``active`` scenarios.TRUNK_BALANCE (a moment on the trunk's pitch about its touchdown
     value), ``fixed`` the same about the nominal touchdown pitch (a reference that does not move with the
     foot placement), ``hip_spring`` a hip spring of scenarios.HIP_TRUNK_SPRING_NM_RAD (conservative).
+    ``posture_sd_rad``: seeded hop-to-hop noise of the touchdown joint angles (HoppingConfig.posture_sd_rad).
     """
     from hop_impedance.simulation.ground import HARD, lossless
     from hop_impedance.simulation.hopping_trial import touchdown_posture
@@ -90,7 +91,8 @@ def lossless_config(freq_hz: float, hops: int, trunk: float, flight: str, seed_l
             options = {**options, "trunk_balance": None, "hip_trunk_spring_nm_rad": HIP_TRUNK_SPRING_NM_RAD}
     chain, config = hopping_config(freq_hz, "hard", hops, Effects(damping=False, push_off=False), variability=False,
                                    flight=flight, **options)
-    config = dataclasses.replace(config, surface=lossless(HARD), friction_coefficient=None)
+    config = dataclasses.replace(config, surface=lossless(HARD), friction_coefficient=None,
+                                 posture_sd_rad=posture_sd_rad)
     if seed_like and balance == "fixed":
         q4 = float(touchdown_posture(chain, np.asarray(config.touchdown_rho_rad), config.com_ahead_m)[3])
         config = dataclasses.replace(config, trunk_balance=dataclasses.replace(config.trunk_balance, reference_rad=q4))
@@ -128,16 +130,18 @@ def hop_energy_parts(chain, rec) -> dict:
 
 
 def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str, seed_like: bool = False,
-                  balance: str = "active", periodic: bool = False) -> str:
+                  balance: str = "active", periodic: bool = False, posture_sd_rad: float = 0.0, seed: int = 1) -> str:
     """Issue 17's passive test (:func:`lossless_config`); per hop the stance time, the COM apex height of the
     following flight and the energy by component (:func:`hop_energy_parts`), and how hop ``hops`` compares
     with hop 3. ``periodic``: also the periodic hop nearest the calibrated one and its eigenvalues."""
     from hop_impedance.simulation.dynamics import body_com, com_velocity
 
-    chain, config = lossless_config(freq_hz, hops, trunk, flight, seed_like, balance)
+    chain, config = lossless_config(freq_hz, hops, trunk, flight, seed_like, balance, posture_sd_rad)
     setup = f"seed-like options, {balance} trunk balance" if seed_like else f"trunk {trunk:g} N m/rad"
+    if posture_sd_rad:
+        setup += f", touchdown posture noise {posture_sd_rad:g} rad (seed {seed})"
     try:
-        trial = simulate_hopping(chain, config, seed=1)
+        trial = simulate_hopping(chain, config, seed=seed)
     except ValueError as exc:
         return f"{flight}, {freq_hz} Hz, {setup}: no trial ({exc})"
     rows, parts = [], []
@@ -175,9 +179,14 @@ def periodic_line(chain, config, cal) -> str:
                       touchdown_vector(cal.speed_m_s, 0.0, cal.com_ahead_m, cal.touchdown_rates_rad_s))
     state = ", ".join(f"{v:.4f}" for v in ph.state)
     moduli = ", ".join(f"{abs(v):.3f}" for v in ph.eigenvalues)
+    values, vectors = np.linalg.eig(ph.jacobian)
+    k = int(np.argmax(np.abs(values)))
+    mode = vectors[:, k] / vectors[np.argmax(np.abs(vectors[:, k])), k]
+    mode_text = ", ".join(f"{v.real:+.2f}" for v in mode)
     return (f"  periodic hop ({'found' if ph.success else 'NOT found'}: max |P(x) - x| {abs(ph.residual).max():.1e}): "
             f"touchdown state [speed, vx, COM ahead, rates q1..q4] = [{state}], stance {1000 * ph.stance_s:.1f} ms, "
-            f"flight {1000 * ph.flight_s:.1f} ms ({1 / (ph.stance_s + ph.flight_s):.3f} Hz); |eigenvalues| {moduli}")
+            f"flight {1000 * ph.flight_s:.1f} ms ({1 / (ph.stance_s + ph.flight_s):.3f} Hz); |eigenvalues| {moduli}; "
+            f"largest {values[k].real:+.3f}{values[k].imag:+.3f}j along [{mode_text}] (real part)")
 
 
 def main() -> None:
@@ -193,14 +202,18 @@ def main() -> None:
                         help="with --lossless: scenarios.seed_like_options (toe-tip contact, posture, trunk balance)")
     parser.add_argument("--balance", choices=BALANCES, default="active",
                         help="with --lossless --seed-like: how the trunk is held (lossless_config)")
+    parser.add_argument("--posture-sd", type=float, default=0.0,
+                        help="with --lossless: touchdown joint-angle noise (rad) and --seeds to run")
+    parser.add_argument("--seeds", default="1", help="with --lossless: comma-separated trial seeds")
     parser.add_argument("--periodic", action="store_true",
                         help="with --lossless: also find the periodic hop and its eigenvalues (simulation/periodic_hop.py)")
     args = parser.parse_args()
     if args.lossless:
         for flight in args.flights.split(","):
             for freq in (float(f) for f in args.freqs.split(",")):
-                print(lossless_hops(freq, args.hops, args.trunk, flight, args.seed_like, args.balance, args.periodic),
-                      flush=True)
+                for seed in (int(v) for v in args.seeds.split(",")):
+                    print(lossless_hops(freq, args.hops, args.trunk, flight, args.seed_like, args.balance, args.periodic,
+                                        args.posture_sd, seed), flush=True)
         return
     lines = ["| flight | frequency (Hz) | push-off work | damping | springs left at take-off | ground | trunk | flight | "
              "stance balance residual |", "|---|---|---|---|---|---|---|---|---|"]

@@ -87,6 +87,8 @@ class PeriodicHop:
         Stance and flight time of the periodic hop (s).
     eigenvalues : ndarray, shape (7,), complex
         Of ``dP/dx`` at the fixed point, largest modulus first (one is ~0, module docstring).
+    jacobian : ndarray, shape (7, 7)
+        ``dP/dx`` they are computed from.
     """
 
     state: np.ndarray
@@ -95,6 +97,7 @@ class PeriodicHop:
     stance_s: float
     flight_s: float
     eigenvalues: np.ndarray
+    jacobian: np.ndarray
 
     @property
     def spectral_radius(self) -> float:
@@ -148,4 +151,4 @@ def periodic_hop(chain: Chain, config: HoppingConfig, cal: HopCalibration, guess
     eig = np.linalg.eigvals(jac)
     eig = eig[np.argsort(-np.abs(eig))]
     res = nxt - x
-    return PeriodicHop(x, res, bool(np.abs(res).max() < tolerance), st.duration_s, flight_s, eig)
+    return PeriodicHop(x, res, bool(np.abs(res).max() < tolerance), st.duration_s, flight_s, eig, jac)
