@@ -14,6 +14,7 @@ uncertainty matches the scatter) and each trial's median.
 
     .venv/bin/python bench/recovery_errors.py
     .venv/bin/python bench/recovery_errors.py --frequencies 2.2 --seeds 11 12 13 14 15 16 17 18
+    .venv/bin/python bench/recovery_errors.py --frequencies 2.2 --edge-profile 11   # moment error at the stance edges
 
 CPU time at the end (about 25 s per frequency for four trials).
 
@@ -50,6 +51,40 @@ def print_table(freq_hz: float, results: dict[str, RecoveryResult]) -> None:
                   f"| error/SE RMS {z_rms[0]:4.1f} {z_rms[1]:4.1f} | trial medians % {trials}")
 
 
+#: Offsets (ms) from touchdown and before take-off at which ``--edge-profile`` prints the moment error.
+PROFILE_MS = (0, 1, 2, 3, 5, 8, 10, 15, 20, 25)
+
+
+def edge_profile(freq_hz: float, seed: int, hops: int, cutoff_hz: float) -> None:
+    """Per stance of one noise-free trial: each joint's analysed minus true moment near the stance edges.
+
+    The analysis' moment is compared sample by sample with the simulator's
+    own (its truth samples, interpolated onto the analysed stance's plate
+    samples), in % of that joint's true peak |moment|, at ``PROFILE_MS`` after
+    the detected touchdown and before the detected take-off.
+    """
+    from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording
+    from hop_impedance.validation.coefficient_recovery import record_law_trial, simulate_law_trial
+
+    rec, truth = record_law_trial(simulate_law_trial(freq_hz, seed, hops), False, np.random.default_rng([seed, 1]))
+    analysis = analyze_recording(rec, AnalysisOptions(marker_cutoff_hz=cutoff_hz, force_cutoff_hz=cutoff_hz))
+    by_touchdown = {round(s["touchdown_s"], 2): s for s in truth["stances"]}
+    print(f"{freq_hz:.2f} Hz seed {seed} noise-free at {cutoff_hz:g} Hz: analysed - true moment, % of the true peak, "
+          f"at {'/'.join(map(str, PROFILE_MS))} ms after touchdown | the same before take-off")
+    for stance in analysis.stances:
+        true = by_touchdown.get(round(stance.touchdown_s, 2))
+        if true is None or stance.joints is None:
+            continue
+        t = stance.joints.time_s + stance.touchdown_s
+        n = len(t)
+        after = [min(int(round(ms * 1e-3 * (n - 1) / (t[-1] - t[0]))), n - 1) for ms in PROFILE_MS]
+        for j, joint in enumerate(JOINTS):
+            m_true = np.asarray(true["samples"]["moments_nm"], float)[:, j]
+            err = 100 * (stance.joints.moment_nm[:, j] - np.interp(t, true["samples"]["t_s"], m_true)) / np.max(np.abs(m_true))
+            print(f"  stance {stance.index} {joint:5s} " + " ".join(f"{err[i]:+5.1f}" for i in after) + " | "
+                  + " ".join(f"{err[n - 1 - i]:+5.1f}" for i in reversed(after)))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frequencies", type=float, nargs="+", default=[1.53, 1.87, 2.20])
@@ -59,11 +94,17 @@ def main() -> None:
     parser.add_argument("--noisy-cutoff", type=float, default=12.0, help="cut-off of the noisy analysis (Hz)")
     parser.add_argument("--skip-first", type=int, default=0, help="simulated stances left out at the start of each trial")
     parser.add_argument("--edge", type=float, default=0.0, help="time left out of the fit at each stance edge (s)")
+    parser.add_argument("--edge-profile", type=int, metavar="SEED",
+                        help="instead of the table: the moment error near each stance edge of seed SEED's noise-free trials")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="one Dask task per frequency and seed: 'local' (embedded cluster) or tcp://HOST:8786")
     args = parser.parse_args()
     cpu0, wall0 = time.process_time(), time.perf_counter()
     cutoffs = {"clean": args.clean_cutoff, "noisy": args.noisy_cutoff}
+    if args.edge_profile is not None:
+        for freq in args.frequencies:
+            edge_profile(freq, args.edge_profile, args.hops, args.clean_cutoff)
+        return
     if args.scheduler:
         from hop_impedance.batch.runner import cluster_map
 

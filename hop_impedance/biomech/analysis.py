@@ -12,8 +12,10 @@ Pipeline (all times in seconds since the recording's first message)
    thresholds with the subject's body weight).
 2. Plate zeroing: offsets measured in each flight, interpolated between
    flight centres (:mod:`force_plate`).
-3. Zero-lag low-pass of the wrench at ``force_cutoff_hz`` (default = the
-   marker cut-off, 12 Hz; see :mod:`filtering`).
+3. The wrench through the markers' own sampling, zero-lag low-pass (at
+   ``force_cutoff_hz``, default = the marker cut-off, 12 Hz; see
+   :mod:`filtering`) and spline (:func:`kinematics.wrench_through_marker_chain`:
+   a touchdown or take-off step is spread as the kinematics spread it).
 4. Kinematics from markers, filtered at ``marker_cutoff_hz`` and resampled
    onto force-plate time (:mod:`kinematics`).
 5. Inverse dynamics on every force frame (:mod:`inverse_dynamics`).
@@ -30,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from hop_impedance.biomech.body_model import BodyModel
-from hop_impedance.biomech.filtering import DEFAULT_CUTOFF_HZ, DEFAULT_MAX_GAP_S, Gap, lowpass, sampling_rate_hz
+from hop_impedance.biomech.filtering import DEFAULT_CUTOFF_HZ, DEFAULT_MAX_GAP_S, Gap, sampling_rate_hz
 from hop_impedance.biomech.force_plate import (
     DEFAULT_FLIGHT_MARGIN_S,
     flight_intervals,
@@ -40,7 +42,14 @@ from hop_impedance.biomech.force_plate import (
 )
 from hop_impedance.biomech.inverse_dynamics import JointLoads, inverse_dynamics_2d, joint_power
 from hop_impedance.biomech.joint_angles import JOINT_NAMES as JOINT_NAMES  # re-exported: batch/task.py reads it here
-from hop_impedance.biomech.kinematics import Kinematics, body_model_from_markers, compute_kinematics, sagittal_markers
+from hop_impedance.biomech.kinematics import (
+    Kinematics,
+    body_model_from_markers,
+    compute_kinematics,
+    measured_marker_times,
+    sagittal_markers,
+    wrench_through_marker_chain,
+)
 from hop_impedance.biomech.stance_detection import DetectorOptions, Stance, StanceDetector
 from hop_impedance.biomech.stance_metrics import (
     com_displacement_from_grf,
@@ -86,6 +95,11 @@ class AnalysisOptions:
         within this many seconds of the first complete frame and before the
         first take-off (:func:`calibration_markers`, the rule the live stage
         uses, so live and offline share one model); None = no time limit.
+    marker_measured_rate_hz : float or None
+        The markers given were resampled from markers measured at this rate
+        (the per-leg rigid-fit markers, :mod:`per_leg`): the wrench is
+        sampled as that measurement was (:func:`kinematics.measured_marker_times`,
+        :func:`kinematics.wrench_through_marker_chain`). None: the markers' own stamps.
     post_takeoff_s : float or None
         Short windows (issue 15, "low latency by default"): each stance is
         analysed on its own window from ``min(touchdown - pad_s, previous
@@ -104,6 +118,7 @@ class AnalysisOptions:
     body_model: BodyModel | None = None
     overrides: dict[str, dict[str, float]] | None = None
     calibration_s: float | None = 1.0
+    marker_measured_rate_hz: float | None = None
     post_takeoff_s: float | None = None
 
     def __post_init__(self) -> None:
@@ -279,8 +294,8 @@ def analyze_span(
         span_reason = _too_sparse_reason(t, data.marker_t_s, options)
     if span_reason is None:
         assert model is not None and data.marker_t_s is not None and data.markers_xz is not None  # checked above
-        fs = sampling_rate_hz(t)
-        smooth = lowpass(zeroed, fs, options.force_cutoff_hz)
+        measured = measured_marker_times(data.marker_t_s, options.marker_measured_rate_hz)
+        smooth = wrench_through_marker_chain(t, zeroed, measured, data.marker_t_s, options.force_cutoff_hz)
         kin, gaps = compute_kinematics(
             data.marker_t_s, data.markers_xz, t, model, options.marker_cutoff_hz, options.max_gap_s
         )

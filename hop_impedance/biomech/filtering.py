@@ -108,6 +108,11 @@ def sampling_rate_hz(t_s: np.ndarray) -> float:
     return float(1.0 / np.median(dt))
 
 
+def uniform_times(start_s: float, end_s: float, rate_hz: float) -> np.ndarray:
+    """Times (s) every 1 / ``rate_hz`` s from ``start_s`` up to ``end_s`` (included when on the grid)."""
+    return start_s + np.arange(int(np.floor((end_s - start_s) * rate_hz + 1e-6)) + 1) / rate_hz
+
+
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Start (inclusive) and end (exclusive) indices of True runs in a 1-D mask."""
     padded = np.concatenate([[False], mask, [False]])

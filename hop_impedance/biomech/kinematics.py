@@ -30,7 +30,15 @@ from scipy.interpolate import CubicSpline
 from scipy.sparse import csr_matrix
 
 from hop_impedance.biomech.body_model import BodyModel, body_model, foot_geometry_from_points, with_overrides
-from hop_impedance.biomech.filtering import DEFAULT_CUTOFF_HZ, DEFAULT_MAX_GAP_S, Gap, fill_gaps, lowpass, sampling_rate_hz
+from hop_impedance.biomech.filtering import (
+    DEFAULT_CUTOFF_HZ,
+    DEFAULT_MAX_GAP_S,
+    Gap,
+    fill_gaps,
+    lowpass,
+    sampling_rate_hz,
+    uniform_times,
+)
 from hop_impedance.biomech.joint_angles import joint_angles, joint_rates, segment_angle
 from hop_impedance.recording import MARKER_NAMES, MarkerSeries, Subject
 
@@ -240,6 +248,104 @@ def compute_kinematics(
         reliable=_reliable_on_output(marker_t_s, reliable_m, t_out, inside),
     )
     return kin, gaps
+
+
+def wrench_through_marker_chain(
+    force_t_s: np.ndarray, wrench: np.ndarray, measured_t_s: np.ndarray, filter_t_s: np.ndarray, cutoff_hz: float
+) -> np.ndarray:
+    """The ground wrench processed as the marker kinematics are: their sampling, their filter, their spline.
+
+    Inverse dynamics balances the wrench against segment accelerations from
+    positions sampled once per marker frame, low-passed on the markers' grid,
+    differentiated twice through a cubic spline (:func:`compute_kinematics`). Low-passing the 1 kHz wrench at the same
+    cut-off on its own clock (Bisseling & Hof 2006; Kristianslund et al.
+    2012) is another filter (a 40 Hz Butterworth at 100 Hz is warped towards
+    Nyquist; the spline puts knots every marker period): the touchdown step
+    then left a +-20 % of peak oscillation in the hip moment of a noise-free
+    simulated stance (docs/impedance_model.md, "Stance edges").
+
+    Rule (choice): the wrench passes the markers' own chain. Its double time
+    integral (for the force, mass times the centre-of-mass path: a position,
+    as a marker is), exact for the wrench linear between plate samples, is
+    sampled at ``measured_t_s`` (the stamps the markers were measured at),
+    interpolated by cubic spline onto ``filter_t_s`` when the markers were
+    resampled before filtering (the per-leg rigid fit's 1 kHz grid), low-passed
+    there at ``cutoff_hz`` by :func:`lowpass`, and differentiated twice
+    through the cubic spline on those samples at the plate times. A force
+    that varies slowly across a marker frame comes back as the low-pass of
+    itself (the spline reproduces cubics); a step is spread as the kinematics
+    spread an acceleration step. Plate times outside the marker grid, and a
+    cut-off at or above that grid's Nyquist frequency (the markers cannot
+    carry it), fall back to :func:`lowpass` on the plate clock (what the
+    analysis did before 2026-11-24).
+
+    Parameters
+    ----------
+    force_t_s : ndarray, shape (N,)
+        Plate times (s), uniformly sampled.
+    wrench : ndarray, shape (N, C)
+        Zeroed wrench on those times.
+    measured_t_s : ndarray, shape (M,)
+        Times (s) the markers were measured at, same clock.
+    filter_t_s : ndarray, shape (K,)
+        Times (s) of the grid the markers are low-passed on (``measured_t_s`` unless they were resampled).
+    cutoff_hz : float
+        Low-pass cut-off (Hz).
+
+    Returns
+    -------
+    ndarray, shape (N, C)
+    """
+    t = np.asarray(force_t_s, float)
+    f: np.ndarray = np.asarray(wrench, float)
+    out: np.ndarray = lowpass(f, sampling_rate_hz(t), cutoff_hz)
+    tm = np.asarray(measured_t_s, float)
+    tm = tm[(tm >= t[0]) & (tm <= t[-1])]
+    tg = np.asarray(filter_t_s, float)
+    tg = tg[(tg >= max(t[0], tm[0] if tm.size else np.inf)) & (tg <= min(t[-1], tm[-1] if tm.size else -np.inf))]
+    if tm.size < 4 or tg.size < 8 or not cutoff_hz < sampling_rate_hz(tg) / 2:
+        return out
+    sampled = _double_integral_at(t, f, tm)
+    on_grid = sampled if tg.size == tm.size and np.allclose(tg, tm) else CubicSpline(tm, sampled, axis=0)(tg)
+    inside = (t >= tg[0]) & (t <= tg[-1])
+    out[inside] = CubicSpline(tg, _lowpassed_positions(on_grid, tg, cutoff_hz), axis=0)(t[inside], 2)
+    return out
+
+
+def _double_integral_at(t: np.ndarray, f: np.ndarray, at_s: np.ndarray) -> np.ndarray:
+    """Double time integral from ``t[0]`` of ``f`` (N, C), exact for ``f`` linear between its samples ``t``, at ``at_s``."""
+    h = np.diff(t)[:, None]
+    i1 = np.concatenate([np.zeros((1, f.shape[1])), np.cumsum(h * (f[:-1] + f[1:]) / 2, axis=0)])
+    i2 = np.concatenate([np.zeros((1, f.shape[1])), np.cumsum(i1[:-1] * h + h**2 * (2 * f[:-1] + f[1:]) / 6, axis=0)])
+    k = np.clip(np.searchsorted(t, at_s, side="right") - 1, 0, t.size - 2)
+    dt = (at_s - t[k])[:, None]
+    out: np.ndarray = i2[k] + i1[k] * dt + f[k] * dt**2 / 2 + (f[k + 1] - f[k]) / h[k] * dt**3 / 6
+    return out
+
+
+def _lowpassed_positions(y: np.ndarray, grid_s: np.ndarray, cutoff_hz: float) -> np.ndarray:
+    """``y`` (K, C) on the uniform ``grid_s`` low-passed as far as a cubic spline's second derivative can tell.
+
+    The low-pass runs on the second differences (the wrench as the grid sees
+    it: bounded, where its double integral grows without bound over a
+    recording and filtering it lost up to 6 significant digits), with which
+    it commutes; a spline's second derivative depends only on second
+    differences, so the sequence rebuilt from the filtered ones (up to a
+    linear part) gives the same one.
+    """
+    hg = float(np.median(np.diff(grid_s)))
+    smooth = lowpass(np.diff(y, 2, axis=0) / hg**2, 1.0 / hg, cutoff_hz)
+    rebuilt: np.ndarray = np.zeros_like(y)
+    rebuilt[2:] = np.cumsum(np.cumsum(smooth * hg**2, axis=0), axis=0)
+    return rebuilt
+
+
+def measured_marker_times(marker_t_s: np.ndarray, measured_rate_hz: float | None) -> np.ndarray:
+    """Times (s) the markers were measured at: their own stamps, or, for markers resampled from a
+    measurement at ``measured_rate_hz`` (the per-leg rigid-fit markers on a 1 kHz grid), every
+    1 / ``measured_rate_hz`` s from the first one."""
+    tm = np.asarray(marker_t_s, float)
+    return tm if measured_rate_hz is None else uniform_times(float(tm[0]), float(tm[-1]), measured_rate_hz)
 
 
 def _filled_filtered_markers(

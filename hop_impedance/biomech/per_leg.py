@@ -74,7 +74,7 @@ from scipy.interpolate import CubicSpline
 from hop_impedance.bilateral import SIDES, BilateralRecording
 from hop_impedance.biomech.analysis import AnalysisOptions, RecordingAnalysis, analyze_recording, calibration_markers
 from hop_impedance.biomech.body_model import BodyModel
-from hop_impedance.biomech.filtering import fill_gaps, lowpass
+from hop_impedance.biomech.filtering import fill_gaps, lowpass, sampling_rate_hz, uniform_times
 from hop_impedance.biomech.kinematics import _POINT_IDX, body_model_from_markers, sagittal_markers, segment_angles_from_points
 from hop_impedance.recording import MARKER_NAMES, MarkerSeries, Recording, Subject
 
@@ -167,7 +167,7 @@ def smooth_pose(t_s: np.ndarray, pose: np.ndarray, cutoff_hz: float) -> tuple[np
 
     Returns ``(grid_s, pose_on_grid)``.
     """
-    grid = t_s[0] + np.arange(int(np.floor((t_s[-1] - t_s[0]) * RIGID_RATE_HZ + 1e-6)) + 1) / RIGID_RATE_HZ
+    grid = uniform_times(t_s[0], t_s[-1], RIGID_RATE_HZ)
     return grid, lowpass(CubicSpline(t_s, pose, axis=0)(grid), RIGID_RATE_HZ, cutoff_hz)
 
 
@@ -275,7 +275,9 @@ def _leg_body_model(rec: Recording, options: AnalysisOptions) -> BodyModel | Non
 
 def _analyze_fitted(rec: Recording, markers: MarkerSeries, model: BodyModel, options: AnalysisOptions) -> RecordingAnalysis:
     """The v1 analysis on rigid-fit markers (step 4 of the module docstring); ``options`` kept as the caller's."""
-    leg_options = replace(options, body_model=model, marker_cutoff_hz=PASS_THROUGH_HZ)
+    assert rec.markers is not None  # analyze_leg fits the rigid leg only to a leg with markers
+    measured_hz = sampling_rate_hz((rec.markers.stamp_ns - rec.markers.stamp_ns[0]) * 1e-9)
+    leg_options = replace(options, body_model=model, marker_cutoff_hz=PASS_THROUGH_HZ, marker_measured_rate_hz=measured_hz)
     analysis = analyze_recording(replace(rec, markers=markers), leg_options)
     analysis.options = replace(options, body_model=model)
     return analysis

@@ -27,10 +27,10 @@ import numpy as np
 import pytest
 
 from hop_impedance.biomech.analysis import recording_span
-from hop_impedance.biomech.filtering import fill_gaps, lowpass, sampling_rate_hz
+from hop_impedance.biomech.filtering import fill_gaps, sampling_rate_hz
 from hop_impedance.biomech.force_plate import flight_intervals, flight_offsets, subtract_offsets
 from hop_impedance.biomech.inverse_dynamics import EXTENSOR_SIGN
-from hop_impedance.biomech.kinematics import _POINT_IDX, compute_kinematics, sagittal_markers
+from hop_impedance.biomech.kinematics import _POINT_IDX, compute_kinematics, sagittal_markers, wrench_through_marker_chain
 
 OPENCAP = Path("/work/shared/data_candidates/opencap_dropjump")
 TRC, MOT = OPENCAP / "Subject4_DJ1_markers_trc.txt", OPENCAP / "Subject4_DJ1_grf_mot.txt"
@@ -115,14 +115,17 @@ def opensim_ik(model, t: np.ndarray, xz: np.ndarray, workdir: Path) -> np.ndarra
     return np.column_stack([col("root_tx"), col("root_ty"), q1, q2, q3, q4])
 
 
-def _analysis_inputs(rec, analysis):
-    """The zeroed, low-passed wrench of the analysis (same functions, same options) and the leg's markers, gaps filled."""
+def _analysis_inputs(rec, analysis, filter_t_s=None):
+    """The zeroed wrench through the markers' chain as the analysis uses it (same functions, same options: measured
+    at the plates' stamps, low-passed on ``filter_t_s``, the rigid fit's 1 kHz grid, or on the markers' own stamps)
+    and the leg's markers, gaps filled."""
     data = recording_span(rec)
     t, opts = data.force_t_s, analysis.options
     flights = flight_intervals([(s.touchdown_s, s.takeoff_s) for s in analysis.stances], float(t[0]), float(t[-1]))
     centres, offsets = flight_offsets(t, data.wrench, flights, opts.flight_margin_s)
-    wrench = lowpass(subtract_offsets(t, data.wrench, centres, offsets), sampling_rate_hz(t), opts.force_cutoff_hz)
     assert np.array_equal(data.marker_t_s, t)  # OpenCap: markers and plates both at 100 Hz on the same stamps
+    zeroed = subtract_offsets(t, data.wrench, centres, offsets)
+    wrench = wrench_through_marker_chain(t, zeroed, t, t if filter_t_s is None else filter_t_s, opts.force_cutoff_hz)
     xz, _, _ = fill_gaps(t, data.markers_xz, opts.max_gap_s)
     return t, wrench, xz
 
@@ -194,11 +197,11 @@ def test_leg_moments_agree_with_opensim_within_2_percent(raw, legs, side, tmp_pa
     np.testing.assert_allclose([analysis.model.foot.mass_kg, analysis.model.shank.mass_kg, analysis.model.thigh.mass_kg],
                                [0.0129 * 60, 0.0481 * 60, 0.1478 * 60], rtol=1e-12)
     assert any(w.startswith(f"{side} leg: kinematics of a rigid-segment fit") for w in analysis.warnings)
-    t, wrench, xz = _analysis_inputs(raw.leg(side), analysis)
     cutoff = analysis.options.marker_cutoff_hz
     assert cutoff == 12.0  # the default, as the analysis ran
     markers, pose, _ = rigid_leg_markers(raw.markers(side), analysis.model, cutoff, analysis.options.max_gap_s)
     grid = (markers.stamp_ns - raw.recording.start_ns) * 1e-9
+    t, wrench, xz = _analysis_inputs(raw.leg(side), analysis, grid)
 
     def on_force_time(p):  # the coordinates at the plate's samples (on the 1 kHz grid: no interpolation error)
         return np.column_stack([np.interp(t, grid, c) for c in p.T])
