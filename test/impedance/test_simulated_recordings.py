@@ -119,7 +119,7 @@ CUTOFF_HZ = {"clean": 40.0, "noisy": 12.0}
 TOLERANCE = {"clean": 0.02, "noisy": 0.10}
 
 #: (noise, frequency, joint) -> measured worst |median error| of k0/k1 where the target is missed
-#: (``bench/recovery_errors.py``, 2026-11-24 23:12 UTC, after the wrench was put through the markers' own
+#: (``bench/recovery_errors.py``, 2026-11-24 22:59 UTC, after the wrench was put through the markers' own
 #: chain: docs/impedance_model.md, "Stance edges"; causes in the module docstring). That change brought the
 #: 1.53 Hz clean hip from k1 -3.7 % to -2.2 % (the rest is the simulator's take-off, below) and the 2.20 Hz clean
 #: hip from +1.8 % to +1.1 %; it moved the 2.20 Hz noisy knee k1 from +8.9 % [+7.0, +14.2] to +10.2 % [+8.0,
