@@ -23,11 +23,13 @@ end of the sin^2 pulse, and the instant of maximal ankle flexion.
 
 Usage: .venv/bin/python bench/simulator_energy_budget.py [--hops 5] [--freqs 1.53,1.87,2.2]
        [--flights prescribed,energy_keeping] [--trunk K] [--write]
-       [--lossless [--seed-like [--balance active|fixed|hip_spring]] [--periodic]]
+       [--lossless [--seed-like [--balance active|fixed|hip_spring]] [--periodic] [--landing]
+                   [--posture-sd RAD --seeds 1,2,3]]
 (``--write`` also writes docs/simulator_energy.md; ``--trunk K`` adds a trunk-balance moment of
 stiffness K N m/rad; ``--lossless`` runs issue 17's passive test instead: no damping, no push-off,
 lossless surface, per hop stance time, COM apex and energy by component, hop N against hop 3;
-``--balance`` chooses how the trunk is held, ``--periodic`` adds the periodic hop and its eigenvalues.)
+``--balance`` chooses how the trunk is held, ``--periodic`` adds the periodic hop and its eigenvalues,
+``--landing`` starts on it and lands along its touchdown rates, ``--posture-sd`` adds touchdown noise.)
 """
 
 from __future__ import annotations
@@ -130,16 +132,28 @@ def hop_energy_parts(chain, rec) -> dict:
 
 
 def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str, seed_like: bool = False,
-                  balance: str = "active", periodic: bool = False, posture_sd_rad: float = 0.0, seed: int = 1) -> str:
+                  balance: str = "active", periodic: bool = False, posture_sd_rad: float = 0.0, seed: int = 1,
+                  landing: bool = False) -> str:
     """Issue 17's passive test (:func:`lossless_config`); per hop the stance time, the COM apex height of the
     following flight and the energy by component (:func:`hop_energy_parts`), and how hop ``hops`` compares
-    with hop 3. ``periodic``: also the periodic hop nearest the calibrated one and its eigenvalues."""
+    with hop 3. ``periodic``: also the periodic hop nearest the calibrated one and its eigenvalues.
+    ``landing``: first find that periodic hop, then start the trial on it (HoppingConfig.first_touchdown)
+    and land every hop along its touchdown rates (HoppingConfig.landing_rates_rad_s); that orbit's
+    eigenvalues are reported too."""
     from hop_impedance.simulation.dynamics import body_com, com_velocity
 
     chain, config = lossless_config(freq_hz, hops, trunk, flight, seed_like, balance, posture_sd_rad)
     setup = f"seed-like options, {balance} trunk balance" if seed_like else f"trunk {trunk:g} N m/rad"
     if posture_sd_rad:
         setup += f", touchdown posture noise {posture_sd_rad:g} rad (seed {seed})"
+    head = []
+    if landing:
+        cal = _calibration(chain, config)
+        ph, text = periodic_line(chain, config, cal)
+        config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(r) for r in ph.state[3:]),
+                                     first_touchdown=tuple(float(v) for v in ph.state))
+        head = [text, "  landing along its touchdown rates: " + periodic_line(chain, config, cal, ph.state)[1].strip()]
+        setup += ", starting on the periodic hop and landing along its touchdown rates"
     try:
         trial = simulate_hopping(chain, config, seed=seed)
     except ValueError as exc:
@@ -166,24 +180,34 @@ def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str, seed_lik
     trunk_j = sum(e["trunk_spring_j"] + e["trunk_damper_j"] for e in parts[:-1])
     lines.append(f"  E at touchdown, hop {len(parts)} - hop 1: {parts[-1]['e_touchdown_j'] - parts[0]['e_touchdown_j']:+.3f} J; "
                  f"trunk-balance work over hops 1-{len(parts) - 1}: {trunk_j:+.3f} J")
-    if periodic:
-        lines.append(periodic_line(chain, config, trial.calibration))
-    return "\n".join(lines)
+    if periodic and not landing:
+        lines.append(periodic_line(chain, config, trial.calibration)[1])
+    return "\n".join(lines + head)
 
 
-def periodic_line(chain, config, cal) -> str:
-    """The periodic hop nearest the calibrated touchdown state (simulation/periodic_hop.py) and its stability."""
+def _calibration(chain, config):
+    from hop_impedance.simulation.hopping_trial import calibrate, touchdown_posture
+
+    return calibrate(chain, config, touchdown_posture(chain, np.asarray(config.touchdown_rho_rad), config.com_ahead_m))
+
+
+def periodic_line(chain, config, cal, guess=None):
+    """(periodic hop, line): the periodic hop nearest ``guess`` (default the calibrated touchdown state;
+    simulation/periodic_hop.py) and its stability."""
     from hop_impedance.simulation.periodic_hop import periodic_hop, touchdown_vector
 
-    ph = periodic_hop(chain, config, cal,
-                      touchdown_vector(cal.speed_m_s, 0.0, cal.com_ahead_m, cal.touchdown_rates_rad_s))
+    if cal is None:
+        cal = _calibration(chain, config)
+    if guess is None:
+        guess = touchdown_vector(cal.speed_m_s, 0.0, cal.com_ahead_m, cal.touchdown_rates_rad_s)
+    ph = periodic_hop(chain, config, cal, guess)
     state = ", ".join(f"{v:.4f}" for v in ph.state)
     moduli = ", ".join(f"{abs(v):.3f}" for v in ph.eigenvalues)
     values, vectors = np.linalg.eig(ph.jacobian)
     k = int(np.argmax(np.abs(values)))
     mode = vectors[:, k] / vectors[np.argmax(np.abs(vectors[:, k])), k]
     mode_text = ", ".join(f"{v.real:+.2f}" for v in mode)
-    return (f"  periodic hop ({'found' if ph.success else 'NOT found'}: max |P(x) - x| {abs(ph.residual).max():.1e}): "
+    return ph, (f"  periodic hop ({'found' if ph.success else 'NOT found'}: max |P(x) - x| {abs(ph.residual).max():.1e}): "
             f"touchdown state [speed, vx, COM ahead, rates q1..q4] = [{state}], stance {1000 * ph.stance_s:.1f} ms, "
             f"flight {1000 * ph.flight_s:.1f} ms ({1 / (ph.stance_s + ph.flight_s):.3f} Hz); |eigenvalues| {moduli}; "
             f"largest {values[k].real:+.3f}{values[k].imag:+.3f}j along [{mode_text}] (real part)")
@@ -205,6 +229,8 @@ def main() -> None:
     parser.add_argument("--posture-sd", type=float, default=0.0,
                         help="with --lossless: touchdown joint-angle noise (rad) and --seeds to run")
     parser.add_argument("--seeds", default="1", help="with --lossless: comma-separated trial seeds")
+    parser.add_argument("--landing", action="store_true",
+                        help="with --lossless: land along the periodic hop's touchdown rates (lossless_hops)")
     parser.add_argument("--periodic", action="store_true",
                         help="with --lossless: also find the periodic hop and its eigenvalues (simulation/periodic_hop.py)")
     args = parser.parse_args()
@@ -213,7 +239,7 @@ def main() -> None:
             for freq in (float(f) for f in args.freqs.split(",")):
                 for seed in (int(v) for v in args.seeds.split(",")):
                     print(lossless_hops(freq, args.hops, args.trunk, flight, args.seed_like, args.balance, args.periodic,
-                                        args.posture_sd, seed), flush=True)
+                                        args.posture_sd, seed, args.landing), flush=True)
         return
     lines = ["| flight | frequency (Hz) | push-off work | damping | springs left at take-off | ground | trunk | flight | "
              "stance balance residual |", "|---|---|---|---|---|---|---|---|---|"]

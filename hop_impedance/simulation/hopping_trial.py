@@ -130,6 +130,16 @@ class HoppingConfig:
         ``"prescribed"``: segments brought to rest at the next touchdown (the energy of segment
         motion at take-off is discarded). ``"energy_keeping"``: the touchdown segment rates carry
         that energy (:func:`flight_segment_rates`); module docstring.
+    landing_rates_rad_s : 4 floats or None
+        Energy-keeping flight only: land along these segment rates (rad/s; their direction, the
+        magnitude carries the flight's energy) instead of the take-off rates reversed: a practised
+        landing motion chosen in flight (issue 17; e.g. the touchdown rates of a periodic hop,
+        :mod:`~hop_impedance.simulation.periodic_hop`). None (default): reversed take-off rates. The
+        calibration's rounds keep the reversed rates, so it is the same with or without.
+    first_touchdown : 7 floats or None
+        The first touchdown state instead of the calibrated one: touchdown speed (m/s, down), COM vx
+        (m/s), COM ahead of the toe (m), segment rates q1..q4 (rad/s), e.g. a periodic hop's
+        (:func:`~hop_impedance.simulation.periodic_hop.periodic_hop`). None (default): calibrated.
     """
 
     freq_hz: float
@@ -150,6 +160,8 @@ class HoppingConfig:
     friction_coefficient: float | None = DEFAULT_FRICTION_COEFFICIENT
     trunk_balance: TrunkBalance | None = None
     flight: str = "prescribed"
+    landing_rates_rad_s: tuple[float, float, float, float] | None = None
+    first_touchdown: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         if self.flight not in FLIGHT_MODELS:
@@ -395,13 +407,14 @@ def _next_touchdown_speed(chain: Chain, stance: StanceSimulation, q_next: np.nda
 
 
 def flight_segment_rates(chain: Chain, law: ImpedanceLaw, stance: StanceSimulation, q_next: np.ndarray,
-                         com_vx_m_s: float) -> tuple[np.ndarray, float, float]:
+                         com_vx_m_s: float, landing_rates_rad_s=None) -> tuple[np.ndarray, float, float]:
     """Segment rates at the touchdown after ``stance``: the flight keeps the energy of segment motion.
 
     Energy carried = kinetic energy of the segments relative to the COM at take-off + what the joint
     springs give back in flight (:func:`returned_spring_energy_j`); it is put into the touchdown
     rates along the time-reversed take-off rates (:func:`touchdown_segment_rates`), so a lossless
-    stance is followed by (nearly) its mirror image. The COM itself is ballistic, so kinetic +
+    stance is followed by (nearly) its mirror image; with ``landing_rates_rad_s`` along those rates
+    instead (:attr:`HoppingConfig.landing_rates_rad_s`). The COM itself is ballistic, so kinetic +
     gravitational energy of the COM is conserved exactly; together nothing is discarded in flight.
 
     Returns
@@ -412,7 +425,8 @@ def flight_segment_rates(chain: Chain, law: ImpedanceLaw, stance: StanceSimulati
     rho_next = joint_angles(np.asarray(q_next, float)[None], chain.alpha_rad)[0]
     carried = internal_kinetic_energy_j(chain, g[2:], gd[2:]) + returned_spring_energy_j(
         law, stance.ref, stance.rho_rad[-1], rho_next)
-    rates, not_placed = touchdown_segment_rates(chain, q_next, com_vx_m_s, -gd[2:], carried)
+    direction = -gd[2:] if landing_rates_rad_s is None else np.asarray(landing_rates_rad_s, float)
+    rates, not_placed = touchdown_segment_rates(chain, q_next, com_vx_m_s, direction, carried)
     return rates, carried, not_placed
 
 
@@ -632,6 +646,10 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
     flights = [_lead_in_flight(chain, config, q_td, td_rates, speed)]
     stances: list[StanceRecord] = []
     x_toe, vx_com = 0.0, 0.0
+    if config.first_touchdown is not None:
+        speed, vx_com, ahead, *first_rates = (float(v) for v in config.first_touchdown)
+        q_td, rates = touchdown_posture(chain, rho_nom, ahead), np.array(first_rates)
+        flights = [_lead_in_flight(chain, config, q_td, rates, speed, vx_com)]
     stop = ""
     t_end = config.lead_in_s
     for i in range(config.n_hops):
@@ -672,13 +690,18 @@ def _calibration_note(config: HoppingConfig, cal: HopCalibration) -> str:
     )
 
 
-def _lead_in_flight(chain: Chain, config: HoppingConfig, q_td: np.ndarray, rates: np.ndarray, speed: float) -> Flight:
-    """Lead-in flight: COM falling onto the first touchdown at ``speed`` (m/s); the segments start at rest and
-    reach the calibrated touchdown ``rates`` (half the lead-in's worth of motion before touchdown)."""
+def _lead_in_flight(chain: Chain, config: HoppingConfig, q_td: np.ndarray, rates: np.ndarray, speed: float,
+                    vx: float | None = None) -> Flight:
+    """Lead-in flight: COM falling onto the first touchdown at ``speed`` (m/s) (and moving at ``vx`` m/s, if
+    given); the segments start at rest and reach the touchdown ``rates`` (half the lead-in's worth of motion
+    before touchdown)."""
     g_acc = chain.gravity_m_s2
     com_td = body_com(chain, np.r_[0.0, 0.0, q_td])
     com0 = com_td + np.array([0.0, speed * config.lead_in_s - 0.5 * g_acc * config.lead_in_s**2])
     vel0 = np.array([0.0, -speed + g_acc * config.lead_in_s])
+    if vx is not None:
+        com0[0] -= vx * config.lead_in_s
+        vel0[0] = vx
     start = [q_td - 0.5 * config.lead_in_s * rates, np.zeros(4), np.zeros(4)]
     lead = BPoly.from_derivatives([0.0, config.lead_in_s], np.array([start, [q_td, rates, np.zeros(4)]]))
     return Flight(0.0, config.lead_in_s, com0, vel0, lead, g_acc)
@@ -740,7 +763,8 @@ def _flight_to_next_touchdown(chain: Chain, config: HoppingConfig, law: Impedanc
     v_next = v_to - np.array([0.0, g_acc * t_f])
     rates, not_placed = None, 0.0
     if config.flight == "energy_keeping":
-        rates, _, not_placed = flight_segment_rates(chain, law, st, q_next, float(v_next[0]))
+        rates, _, not_placed = flight_segment_rates(chain, law, st, q_next, float(v_next[0]),
+                                                    config.landing_rates_rad_s)
     td_next = touchdown_state(chain, q_next, v_next, 0.0, rates)
     angles = BPoly.from_derivatives(
         [0.0, t_f],

@@ -152,6 +152,10 @@ def trial_truth(
             "horizontal_contact": ("no-slip kinematic constraint at the toe while |Fx| <= mu Fz, Coulomb sliding "
                                    "beyond" if cfg.friction_coefficient is not None
                                    else "no-slip kinematic constraint at the toe"),
+            # issue 17's landing controller and start state, only when used (older truth files stay the same)
+            **({"landing_rates_rad_s": [float(v) for v in cfg.landing_rates_rad_s]}
+               if cfg.landing_rates_rad_s is not None else {}),
+            **({"first_touchdown": [float(v) for v in cfg.first_touchdown]} if cfg.first_touchdown is not None else {}),
         },
         "calibration": {k: (bool(v) if isinstance(v, (bool, np.bool_)) else float(v))
                         for k, v in (trial.calibration.to_dict() if trial.calibration is not None else {}).items()},

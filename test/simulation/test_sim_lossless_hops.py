@@ -15,9 +15,15 @@ import numpy as np
 import pytest
 from scipy.integrate import trapezoid
 
-from hop_impedance.simulation.dynamics import body_com, com_velocity, mechanical_energy_j
+from hop_impedance.simulation.dynamics import (
+    body_com,
+    com_offset_jacobian,
+    com_velocity,
+    internal_kinetic_energy_j,
+    mechanical_energy_j,
+)
 from hop_impedance.simulation.ground import HARD, lossless
-from hop_impedance.simulation.hopping_trial import simulate_hopping, simulate_resample
+from hop_impedance.simulation.hopping_trial import flight_segment_rates, simulate_hopping, simulate_resample
 from hop_impedance.simulation.periodic_hop import hop_step, touchdown_vector
 from hop_impedance.simulation.scenarios import HIP_TRUNK_SPRING_NM_RAD, Effects, hopping_config, seed_like_options
 
@@ -99,3 +105,23 @@ def test_active_trunk_balance_is_the_energy_source_of_the_drifting_hop():
         gains.append(touchdown_energy_j(tr, nxt) - touchdown_energy_j(tr, rec))
     np.testing.assert_allclose(gains, works, atol=1e-3)  # J; measured within 1e-5 J
     assert sum(gains) > 5.0  # J over three hops: measured 1.2 + 3.0 + 7.4 J
+
+
+def test_landing_rates_choose_the_direction_and_keep_the_energy(hip_spring_trial):
+    """HoppingConfig.landing_rates_rad_s: the energy-keeping flight lands along the given rates (their part
+    that does not slide the toe) with the same energy as along the reversed take-off rates."""
+    tr = hip_spring_trial
+    rec, q_next = tr.stances[0], tr.stances[1].touchdown.g[2:]
+    vx = float(com_velocity(tr.chain, tr.stances[1].touchdown.g, tr.stances[1].touchdown.gd)[0])
+    reversed_rates, carried, _ = flight_segment_rates(tr.chain, rec.law, rec.stance, q_next, vx)
+    landing = np.array([1.0, -0.5, 0.3, 0.2])
+    rates, carried_too, not_placed = flight_segment_rates(tr.chain, rec.law, rec.stance, q_next, vx, landing)
+    assert carried_too == carried and not_placed == 0.0
+    assert internal_kinetic_energy_j(tr.chain, q_next, rates) == pytest.approx(carried, rel=1e-10)
+    assert internal_kinetic_energy_j(tr.chain, q_next, reversed_rates) == pytest.approx(carried, rel=1e-10)
+    j0 = com_offset_jacobian(tr.chain, q_next)[0]
+    base = j0 * (vx / float(j0 @ j0))
+    along = landing - j0 * (float(j0 @ landing) / float(j0 @ j0))
+    scale = float((rates - base) @ along) / float(along @ along)
+    assert scale > 0
+    np.testing.assert_allclose(rates - base, scale * along, atol=1e-12)
