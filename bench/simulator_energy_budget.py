@@ -177,8 +177,15 @@ def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str, seed_lik
     if len(rows) >= 4:
         (ts3, a3), (tsn, an) = rows[2], rows[-1]
         lines.append(f"  hop {len(rows)} vs hop 3: stance {tsn / ts3 - 1:+.1%}, apex {an / a3 - 1:+.2%}")
+    pitch = max(float(np.abs(rec.stance.g[:, 5] - rec.touchdown.g[5]).max()) for rec in trial.stances)
+    hip_range = max(float(np.ptp(rec.stance.rho_rad[:, 2])) for rec in trial.stances)
+    lines.append(f"  trunk pitch within {pitch:.3f} rad of its touchdown value; hip range in stance at most "
+                 f"{hip_range:.3f} rad")
     trunk_j = sum(e["trunk_spring_j"] + e["trunk_damper_j"] for e in parts[:-1])
-    lines.append(f"  E at touchdown, hop {len(parts)} - hop 1: {parts[-1]['e_touchdown_j'] - parts[0]['e_touchdown_j']:+.3f} J; "
+    e0 = parts[0]["e_touchdown_j"]
+    drift = max(abs(e["e_touchdown_j"] - e0) for e in parts) / e0
+    lines.append(f"  E at touchdown, hop {len(parts)} - hop 1: {parts[-1]['e_touchdown_j'] - e0:+.3f} J "
+                 f"(largest relative difference from hop 1: {drift:.1e}); "
                  f"trunk-balance work over hops 1-{len(parts) - 1}: {trunk_j:+.3f} J")
     if periodic and not landing:
         lines.append(periodic_line(chain, config, trial.calibration)[1])
