@@ -15,7 +15,12 @@ import numpy as np
 import pytest
 
 from hop_impedance.validation.strict_generator import StrictConfig, strict_recording
-from hop_impedance.validation.strict_generator.generator import _stance, _stance_state, perturbed_body
+from hop_impedance.validation.strict_generator.generator import (
+    _stance,
+    _stance_state,
+    perturbed_body,
+    recording_stiffness,
+)
 
 PACKAGE = Path(__file__).resolve().parents[2] / "hop_impedance" / "validation" / "strict_generator"
 _CACHE: dict = {}
@@ -37,7 +42,8 @@ def test_generator_imports_nothing_from_the_simulator_or_the_discovery():
 def _one_stance():
     if "stance" not in _CACHE:
         rng = np.random.default_rng(3)
-        _CACHE["stance"] = _stance(perturbed_body(60.0, 1.65, rng), rng, StrictConfig())
+        body = perturbed_body(60.0, 1.65, rng)
+        _CACHE["stance"] = _stance(body, rng, StrictConfig(), recording_stiffness(rng))
     return _CACHE["stance"]
 
 
@@ -74,3 +80,16 @@ def test_strict_recording_passes_the_analysis_with_every_hop_and_no_net_joint_wo
     assert [s.touchdown_s for s in trial.stances] == pytest.approx(tds, abs=0.005)
     w = np.array([measured_net_work_j(s) for s in trial.stances])
     assert abs(w.mean()) < 1.0
+
+
+def test_one_joint_law_per_recording_unless_a_spread_is_asked_for():
+    """The strict baseline is ``M = M_td + K phi`` with one K per recording (the outside generator's nulls: one
+    ``kc`` per file, a different ``M_td`` per hop); ``stiffness_spread`` makes K vary by stance on purpose."""
+    _, truth = strict_recording(StrictConfig(hops=3, seed=5))
+    k0 = np.array([h["k0"] for h in truth["per_hop"]])
+    m_td = np.array([h["M_td"] for h in truth["per_hop"]])
+    assert np.ptp(k0, axis=0).max() == 0.0
+    assert np.ptp(m_td, axis=0).min() > 0.1  # touchdown moments differ hop by hop
+    _, spread = strict_recording(StrictConfig(hops=3, seed=5, stiffness_spread=0.2))
+    k0s = np.array([h["k0"] for h in spread["per_hop"]])
+    assert 0.0 < np.ptp(k0s / k0s.mean(axis=0), axis=0).max() < 0.8

@@ -16,6 +16,11 @@ Equations of motion: segment centre-of-mass positions and angles are written in 
 mass matrix is ``sum m J^T J + I j^T j`` and the velocity term ``sum m J^T (dJ/dt qd) + ...`` (Kane's
 projection), lambdified to numpy. Integrated with ``scipy.integrate.solve_ivp(method="DOP853")``.
 
+Joint stiffness ``k0`` is drawn once per recording (one subject, one law), as in the outside generator
+(its nulls' truth files hold one ``kc`` per recording and a different ``M_td`` per hop). A stiffness that
+changes from stance to stance is not the strict baseline but an effect of its own: it is available as
+``StrictConfig.stiffness_spread`` (off by default) to measure what the discovery does with it.
+
 Stances are time-symmetric by construction: each starts at a random mid-stance posture with all
 velocities zero (moments set so the joints do not accelerate there), is integrated forward to take-off
 and mirrored (``q(-t) = q(t)``). Flights join take-off and the next touchdown by cubic Hermite curves
@@ -72,6 +77,9 @@ class StrictConfig:
     marker_latency_s : float
         Markers show the body this much later than the plate (s).
     mass_kg, height_m : float
+    stiffness_spread : float
+        Stance-to-stance spread of ``k0`` around the recording's value: each stance's ``k0`` is the recording's
+        times ``1 + stiffness_spread * U(-1, 1)`` per joint (0 = one law per recording, the strict baseline).
     """
 
     hops: int = 8
@@ -84,6 +92,7 @@ class StrictConfig:
     force_noise_n: float = 2.0
     torque_noise_nm: float = 0.5
     marker_noise_m: float = 0.001
+    stiffness_spread: float = 0.0
 
     @property
     def effects(self) -> list[str]:
@@ -225,13 +234,22 @@ class StanceModel:
         return float(sum(m * (np.asarray(j, float)[1] @ qd) for m, j in zip(self.mass, self.f_j(q, qd))) / self.mass.sum())
 
 
-def _mid_posture(body: Body, rng: np.random.Generator, cfg: StrictConfig):
+#: Nominal joint stiffness (N m/rad; ankle, knee, hip) before the per-recording draw U(0.8, 1.2).
+K0_NOMINAL = np.array([250.0, 250.0, 150.0])
+
+
+def recording_stiffness(rng: np.random.Generator) -> np.ndarray:
+    """The recording's joint stiffness ``k0`` (N m/rad): :data:`K0_NOMINAL` times U(0.8, 1.2) per joint."""
+    return K0_NOMINAL * rng.uniform(0.8, 1.2, 3)
+
+
+def _mid_posture(body: Body, rng: np.random.Generator, cfg: StrictConfig, k0_rec: np.ndarray):
     """Random mid-stance state at rest and the law that holds the joints still there."""
     a0 = np.arctan2(body.ankle_height, -ANKLE_ALONG * body.sole)
     a = a0 - np.deg2rad(rng.uniform(30.0, 45.0))  # heel raised
     th_t = np.deg2rad(rng.uniform(100.0, 115.0))
     th_h = np.deg2rad(rng.uniform(65.0, 80.0))  # trunk leaning forward 10-25 deg
-    k0 = np.array([250.0, 250.0, 150.0]) * rng.uniform(0.8, 1.2, 3)
+    k0 = k0_rec * (1.0 + cfg.stiffness_spread * rng.uniform(-1.0, 1.0, 3))
     k1 = cfg.angle_k1 * k0
     weight = body.mass.sum() * G
     f_mid = weight * rng.uniform(2.2, 2.8)
@@ -254,10 +272,10 @@ def _mid_posture(body: Body, rng: np.random.Generator, cfg: StrictConfig):
     return q, sol[2:], k0, k1
 
 
-def _stance(body: Body, rng: np.random.Generator, cfg: StrictConfig, tries: int = 20) -> dict:
+def _stance(body: Body, rng: np.random.Generator, cfg: StrictConfig, k0_rec: np.ndarray, tries: int = 20) -> dict:
     """One time-symmetric stance (mirrored around mid-stance); re-drawn until it is a plausible hop."""
     for _ in range(tries):
-        q_mid, m_mid, k0, k1 = _mid_posture(body, rng, cfg)
+        q_mid, m_mid, k0, k1 = _mid_posture(body, rng, cfg, k0_rec)
         model = StanceModel(body, q_mid[2:], m_mid, k0, k1)
 
         def takeoff(t, y):
@@ -306,7 +324,8 @@ def strict_recording(cfg: StrictConfig) -> tuple[Recording, dict]:
     """
     rng = np.random.default_rng(cfg.seed)
     body = perturbed_body(cfg.mass_kg, cfg.height_m, rng)
-    timeline = _Timeline.of([_stance(body, rng, cfg) for _ in range(cfg.hops)])
+    k0_rec = recording_stiffness(rng)
+    timeline = _Timeline.of([_stance(body, rng, cfg, k0_rec) for _ in range(cfg.hops)])
     t_f, force, torque = _plate_series(timeline, cfg, rng)
     t_m, pos = _marker_series(timeline, cfg, rng)
     start_ns = 1_710_000_000_000_000_000 + int(cfg.seed) * 1_000_000_000
