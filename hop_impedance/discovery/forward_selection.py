@@ -34,8 +34,9 @@ ID-moment residual of that stance, also on the held-out stance: it is part
 of the measured touchdown state), the push-off amplitude of each stance when the model has a push-off
 (a per-hop control input, :func:`hop_impedance.discovery.identify.per_stance_push_off`) and body-segment
 parameters that differ
-from the de Leva tables (the identification works on the measured ID moments
-of the analysis' own body model, nothing is fitted to segment masses).
+from the de Leva tables (the thigh/HAT mass split is chosen by the baseline's
+forward gap before any candidate is tried, :mod:`hop_impedance.discovery.body_nuisance`;
+every model is then identified on the ID moments of that body and simulated with it).
 """
 
 from __future__ import annotations
@@ -142,7 +143,7 @@ def measured_absorbed_work_j(s: MeasuredStance) -> float:
 
 
 def _trial_for(spec: ModelSpec) -> MeasuredTrial:
-    """The measured trial with the model's marker latency removed (re-measured once per latency).
+    """The measured trial with the model's marker latency removed and its body split (re-measured once per pair).
 
     Latencies are taken to the microsecond and the trial is re-measured at
     that rounded value, not at the first latency of its bucket a process
@@ -151,12 +152,12 @@ def _trial_for(spec: ModelSpec) -> MeasuredTrial:
     numbers differing by up to 1.9e-3 relative (stream_latency candidate).
     """
     trial = _CONTEXT["trial"]
-    if abs(spec.latency_s - trial.marker_latency_s) < 1e-6:
+    if abs(spec.latency_s - trial.marker_latency_s) < 1e-6 and abs(spec.body_fraction - trial.body_fraction) < 1e-6:
         return trial
-    key = round(spec.latency_s, 6)
+    key = (round(spec.latency_s, 6), round(spec.body_fraction, 6))
     cache = _CONTEXT.setdefault("latency_cache", {})
     if key not in cache:
-        cache[key] = measure_trial(_CONTEXT["rec"], marker_latency_s=key)
+        cache[key] = measure_trial(_CONTEXT["rec"], key[0], trial.options, key[1], trial.table_model)
     return cache[key]
 
 

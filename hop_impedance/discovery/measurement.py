@@ -25,6 +25,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording
+from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.biomech.filtering import fill_gaps, lowpass, sampling_rate_hz
 from hop_impedance.biomech.kinematics import compute_kinematics, sagittal_markers
 from hop_impedance.recording import GRAVITY_M_S2, Recording
@@ -99,6 +100,12 @@ class MeasuredTrial:
     marker_latency_s : float
         Latency that was removed from the marker stamps before analysis (s).
     warnings : list of str
+    options : AnalysisOptions
+        The analysis options it was measured with, before any body split (re-measuring keeps them).
+    body_fraction : float
+        Share of the table's thigh mass moved to the HAT for this measurement (:func:`split_overrides`).
+    table_model : BodyModel or None
+        The analysis' own (table) body model, before the split.
     """
 
     stances: list[MeasuredStance]
@@ -108,6 +115,9 @@ class MeasuredTrial:
     com_acc_z: CubicSpline
     marker_latency_s: float = 0.0
     warnings: list[str] = field(default_factory=list)
+    options: AnalysisOptions = field(default_factory=AnalysisOptions)
+    body_fraction: float = 0.0
+    table_model: BodyModel | None = None
 
 
 def shift_marker_stream(rec: Recording, latency_s: float) -> Recording:
@@ -129,7 +139,20 @@ def _com_z_spline(marker_t: np.ndarray, markers_xz: np.ndarray, model, cutoff_hz
     return CubicSpline(marker_t[ok], z[ok]).derivative(2)
 
 
-def measure_trial(rec: Recording, marker_latency_s: float = 0.0, options: AnalysisOptions | None = None) -> MeasuredTrial:
+def split_overrides(model: BodyModel, fraction: float) -> dict[str, dict[str, float]]:
+    """Segment overrides moving ``fraction`` of ``model``'s thigh mass to its HAT (radii of gyration kept).
+
+    The body nuisance of discovery (:mod:`hop_impedance.discovery.body_nuisance`); total mass unchanged.
+    """
+    dm = fraction * model.thigh.mass_kg
+    out = {}
+    for seg, mass in ((model.thigh, model.thigh.mass_kg - dm), (model.hat, model.hat.mass_kg + dm)):
+        out[seg.name] = {"mass_kg": mass, "inertia_kgm2": seg.inertia_kgm2 * mass / seg.mass_kg}
+    return out
+
+
+def measure_trial(rec: Recording, marker_latency_s: float = 0.0, options: AnalysisOptions | None = None,
+                  body_fraction: float = 0.0, table_model: BodyModel | None = None) -> MeasuredTrial:
     """Extract the per-stance signals of a recording (see module docstring).
 
     Parameters
@@ -139,6 +162,10 @@ def measure_trial(rec: Recording, marker_latency_s: float = 0.0, options: Analys
     marker_latency_s : float
         Marker latency to remove first (s, positive = markers lag).
     options : AnalysisOptions, optional
+    body_fraction : float
+        Share of the table's thigh mass to move to the HAT (:func:`split_overrides`); 0 = the table.
+    table_model : BodyModel, optional
+        The table model to split (default: the one the analysis scales from the markers).
 
     Returns
     -------
@@ -151,13 +178,11 @@ def measure_trial(rec: Recording, marker_latency_s: float = 0.0, options: Analys
     """
     if rec.markers is None or len(rec.markers) < 8:
         raise ValueError(f"{rec.source or 'recording'}: discovery needs marker data on the marker topic")
-    options = options or AnalysisOptions()
+    base_options = options = options or AnalysisOptions()
     rec = shift_marker_stream(rec, marker_latency_s)
     markers = rec.markers
     assert markers is not None  # checked above; shift_marker_stream keeps them
-    analysis = analyze_recording(rec, options)
-    if analysis.model is None:
-        raise ValueError(f"{rec.source or 'recording'}: no body model could be built from the markers")
+    analysis, options, table_model = _analysed(rec, options, body_fraction, table_model)
     t_f = (rec.force.stamp_ns - analysis.start_ns) * 1e-9
     t_m = (markers.stamp_ns - analysis.start_ns) * 1e-9
     fz_raw = rec.force.force_n[:, 2].astype(float)
@@ -167,6 +192,17 @@ def measure_trial(rec: Recording, marker_latency_s: float = 0.0, options: Analys
     kin, _ = compute_kinematics(t_m, xz, t_f, analysis.model, options.marker_cutoff_hz, options.max_gap_s)
     com_acc = _com_z_spline(t_m, np.where(np.isfinite(filled), filled, np.nan), analysis.model, options.marker_cutoff_hz)
     chain = chain_from_body_model(analysis.model)
+    stances, rejected = _usable_stances(analysis, t_f, fz_raw, fz_lp, kin, chain)
+    if not stances:
+        reasons = "; ".join(f"stance {r['index']}: {r['reason']}" for r in rejected) or "no stance detected"
+        raise ValueError(f"{rec.source or 'recording'}: no stance usable for discovery ({reasons})")
+    mass = analysis.subject.body_mass_kg  # rec.subject (analyze_recording raises without one)
+    return MeasuredTrial(stances, rejected, chain, mass, com_acc, marker_latency_s, list(analysis.warnings), base_options,
+                         body_fraction, table_model)
+
+
+def _usable_stances(analysis, t_f, fz_raw, fz_lp, kin, chain: Chain) -> tuple[list[MeasuredStance], list[dict]]:
+    """The analysis' stances discovery can use, and the others with their reasons."""
     stances, rejected = [], []
     prev_takeoff = float(t_f[0]) - 1.0
     for s in analysis.stances:
@@ -184,11 +220,20 @@ def measure_trial(rec: Recording, marker_latency_s: float = 0.0, options: Analys
             continue
         stances.append(_measured_stance(s, sel, t_f, fz_raw, fz_lp, kin, chain, prev_takeoff))
         prev_takeoff = s.takeoff_s
-    if not stances:
-        reasons = "; ".join(f"stance {r['index']}: {r['reason']}" for r in rejected) or "no stance detected"
-        raise ValueError(f"{rec.source or 'recording'}: no stance usable for discovery ({reasons})")
-    mass = analysis.subject.body_mass_kg  # rec.subject (analyze_recording raises without one)
-    return MeasuredTrial(stances, rejected, chain, mass, com_acc, marker_latency_s, list(analysis.warnings))
+    return stances, rejected
+
+
+def _analysed(rec: Recording, options: AnalysisOptions, body_fraction: float, table_model: BodyModel | None):
+    """``(analysis, options it ran with, table model)``: the analysis with the body split applied."""
+    if body_fraction:
+        if table_model is None:
+            table_model = analyze_recording(rec, options).model
+        if table_model is not None:
+            options = replace(options, overrides={**(options.overrides or {}), **split_overrides(table_model, body_fraction)})
+    analysis = analyze_recording(rec, options)
+    if analysis.model is None:
+        raise ValueError(f"{rec.source or 'recording'}: no body model could be built from the markers")
+    return analysis, options, table_model or analysis.model
 
 
 def _measured_stance(s, sel, t_f, fz_raw, fz_lp, kin, chain: Chain, prev_takeoff_s: float) -> MeasuredStance:

@@ -104,6 +104,9 @@ class ModelSpec:
     surface_split : float or None
         Stances whose :func:`~hop_impedance.discovery.identify.compliance_index`
         is below this value stand on the stiffer surface.
+    body_fraction : float
+        Nuisance, not an effect: share of the analysis table's thigh mass moved to the HAT
+        (:mod:`hop_impedance.discovery.body_nuisance`); trials are measured with that body.
     """
 
     effects: tuple[str, ...] = ()
@@ -119,6 +122,7 @@ class ModelSpec:
     ground_damping_n_s_m: float = 0.0
     stiff_compliance: tuple[float, float, float] | None = None
     surface_split: float | None = None
+    body_fraction: float = 0.0
 
     def with_effect(self, name: str, **params) -> ModelSpec:
         """Copy with ``name`` appended and parameters replaced."""

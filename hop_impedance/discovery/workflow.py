@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -13,6 +14,7 @@ from scipy.integrate import trapezoid
 
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.discovery import forward_selection as fs
+from hop_impedance.discovery.body_nuisance import choose_body
 from hop_impedance.discovery.identify import SIGNALS, core, identify, residuals
 from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
 from hop_impedance.discovery.model import ModelSpec, feature_names
@@ -154,8 +156,8 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
         ``effects_found``, ``stances`` (used / rejected), ``selection``, ``timing``.
     """
     t_start = time.perf_counter()
-    trial = _measured_trial(rec)
-    spec = ModelSpec()
+    trial, body = choose_body(rec, _measured_trial(rec), workers)
+    spec = ModelSpec(body_fraction=body.fraction)
     spec_fit, coefs = identify(spec, trial, trial.stances)
     timing: dict = {"per_candidate_s": {}, "rounds": []}
     with fs.HeldOutEvaluator(rec, trial, workers) as ev:
@@ -163,6 +165,8 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
         timing["baseline_s"] = current.seconds
         scales = ev.scales
         doc = _baseline_document(spec_fit, coefs, trial, current, scales)
+        doc["nuisance"] = {"body_mass_split": body.as_json()}
+        timing["body_s"] = body.seconds
         for _ in range(max_steps):
             cands = fs.remaining(spec)
             if not cands:
@@ -175,12 +179,13 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
             best = max(ok, key=lambda sc: sc.mean_log_ratio)
             evidence = residual_evidence(spec_fit, coefs, trial)
             spec = best.runs.spec
-            if best.effect == "stream_latency":
-                trial = measure_trial(rec, marker_latency_s=spec.latency_s)
+            # the body split absorbed what the model missed before this step: choose it again with the step
+            trial, spec = _body_for(rec, trial, spec, workers, doc)
             spec_fit, coefs = identify(spec, trial, trial.stances)
             doc["steps"].append(_step_json(best, scores, evidence, parameters_of(spec, coefs, best.effect), len(cands),
                                            current, scales))
-            current = best.runs
+            # the next round compares with this model (on the new body when it was chosen again)
+            current = best.runs if spec == best.runs.spec else ev.run(spec, [None])[0]
     doc["final_gap"] = current.figures(scales)
     doc["effects_found"] = [st["effect"] for st in doc["steps"]]
     doc["final_model"] = _final_model_json(spec, spec_fit, coefs)
@@ -188,6 +193,20 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
     timing["total_s"] = time.perf_counter() - t_start
     doc["timing"] = timing
     return doc
+
+
+def _body_for(rec: Recording, trial: MeasuredTrial, spec: ModelSpec, workers: int | None,
+              doc: dict) -> tuple[MeasuredTrial, ModelSpec]:
+    """Trial and model with the body split chosen again for ``spec`` (after each named step).
+
+    The split chosen for the baseline may have absorbed part of the effect just named (a split is kept
+    only if it removes at least half of the model's gap, :data:`body_nuisance.MIN_BODY_SHRINK`); chosen
+    again with the effect in the model, it absorbs only what the model still misses.
+    """
+    table = measure_trial(rec, spec.latency_s, trial.options, 0.0, trial.table_model)
+    trial, body = choose_body(rec, table, workers, spec)
+    doc["nuisance"].setdefault("body_mass_split_after_step", []).append(body.as_json())
+    return trial, replace(spec, body_fraction=body.fraction)
 
 
 def _measured_trial(rec: Recording) -> MeasuredTrial:
