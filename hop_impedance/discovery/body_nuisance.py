@@ -47,7 +47,7 @@ from scipy.optimize import minimize_scalar
 
 from hop_impedance.discovery.forward_selection import gap_scales, simulate_held_out
 from hop_impedance.discovery.identify import identify
-from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
+from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial, split_overrides
 from hop_impedance.discovery.model import ModelSpec
 from hop_impedance.recording import Recording
 
@@ -96,11 +96,11 @@ def in_sample_gap(trial: MeasuredTrial, scales: np.ndarray, spec: ModelSpec | No
 
 
 def _stance_gap(trial: MeasuredTrial, index: int, scales: np.ndarray, spec: ModelSpec) -> float:
-    key = (id(trial), spec)
-    if key not in _CONTEXT:
-        _CONTEXT.clear()  # one trial's model at a time (a search moves on, it does not come back)
-        _CONTEXT[key] = identify(spec, trial, trial.stances)
-    fitted, coefs = _CONTEXT[key]
+    # one trial's model at a time (a search moves on, it does not come back); the trial itself is held, so a
+    # new trial can never be mistaken for a freed one whose id() it reuses
+    if _CONTEXT.get("trial") is not trial or _CONTEXT.get("spec") != spec:
+        _CONTEXT.update(trial=trial, spec=spec, fit=identify(spec, trial, trial.stances))
+    fitted, coefs = _CONTEXT["fit"]
     s = next(st for st in trial.stances if st.index == index)
     return min(simulate_held_out(fitted, coefs, trial, s, scales)["gap"], FAILED_GAP)
 
@@ -142,12 +142,10 @@ def choose_body(rec: Recording, trial: MeasuredTrial, workers: int | None = None
     pool = (ProcessPoolExecutor(n, mp_context=mp.get_context("fork"))
             if n > 1 and "fork" in mp.get_all_start_methods() else None)
     indices = [s.index for s in trial.stances]
-    evaluations: list[float] = []
 
     def gap(fraction: float) -> float:
         tasks = [(fraction, i) for i in indices]
         gaps = list(pool.map(_search_task, tasks)) if pool else [_search_task(t) for t in tasks]
-        evaluations.append(fraction)
         return float(np.mean(gaps))
 
     try:
@@ -162,8 +160,8 @@ def choose_body(rec: Recording, trial: MeasuredTrial, workers: int | None = None
     chosen = _measured(fraction)
     _SEARCH.clear()
     _CONTEXT.clear()
-    dm = fraction * model.thigh.mass_kg
-    choice = BodyChoice(fraction, (model.thigh.mass_kg, model.thigh.mass_kg - dm),
-                        (model.hat.mass_kg, model.hat.mass_kg + dm), gap_table, best, len(evaluations),
+    split = split_overrides(model, fraction)
+    choice = BodyChoice(fraction, (model.thigh.mass_kg, split["thigh"]["mass_kg"]),
+                        (model.hat.mass_kg, split["hat"]["mass_kg"]), gap_table, best, int(res.nfev) + 1,
                         time.perf_counter() - t0, searched)
     return chosen, choice
