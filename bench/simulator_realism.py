@@ -338,7 +338,8 @@ def main() -> None:
                              "virtual hinge (scenarios.toe_tip_ahead_m)")
     parser.add_argument("--seed-like", action="store_true",
                         help="issue 17's candidate: scenarios.seed_like_options (toe-tip contact, its touchdown posture, "
-                             "trunk balance, late push-off); overrides --trunk, --contact, --posture")
+                             "trunk balance, late push-off); overrides --trunk and --contact (--posture, --push-timing "
+                             "then vary it)")
     parser.add_argument("--push-timing", default=None,
                         help="push-off onset, duration as fractions of the passive stance, e.g. 0.4,0.4 (after --seed-like)")
     parser.add_argument("--activation", action="store_true",
@@ -358,8 +359,12 @@ def main() -> None:
         args.contact = "toe_tip"
     if args.push_timing:
         push_timing = tuple(float(v) for v in args.push_timing.split(","))
-    if args.write and (args.freqs or args.push_timing or args.activation):
-        parser.error("--write writes the chosen configuration only: not with --freqs, --push-timing, --activation")
+    if args.posture and args.seed_like:  # a posture trial on the seed-like hopper
+        a, k, h = (float(v) for v in args.posture.split(","))
+        posture = (a, np.pi + k, np.pi + h)
+    if args.write and (args.freqs or args.push_timing or args.activation or (args.posture and args.seed_like)):
+        parser.error("--write writes the chosen configuration only: not with --freqs, --push-timing, --activation, "
+                     "or --posture with --seed-like")
     wanted = None if args.freqs is None else [float(v) for v in args.freqs.split(",")]
     t0 = time.perf_counter()
     results = {}
