@@ -385,13 +385,15 @@ MARKER_FIT_DEGREE = 1
 def short_window(stances: list[Stance], k: int, options: AnalysisOptions) -> tuple[float, float]:
     """Window of stance ``k`` when ``options.post_takeoff_s`` is set (s): (start, take-off + post_takeoff_s).
 
-    Starts at ``touchdown - pad_s`` or the previous take-off if earlier, so
-    the previous flight (the plate offset used for this stance) is whole.
+    Starts at ``touchdown - pad_s`` or ``TEMPLATE_LEAD_S`` before the
+    previous take-off if earlier, so the previous flight (the plate offset
+    used for this stance) is whole and the previous hop's take-off (the
+    markers' template, :func:`_templated_markers`) is in the window.
     """
     s = stances[k]
     start = s.touchdown_s - options.pad_s
     if k > 0:
-        start = min(start, stances[k - 1].takeoff_s)
+        start = min(start, stances[k - 1].takeoff_s - (TEMPLATE_LEAD_S if MARKER_TEMPLATE else 0.0))
     return start, s.takeoff_s + _post_takeoff_s(options)
 
 
@@ -439,31 +441,25 @@ def extend_past_window(span: SpanData, stances: list[Stance], k: int, options: A
       interior) instead of the mean of the few samples the window holds.
       No flight before the stance in the window: zero offset, what the
       zeroing assumes without flights.
-    - markers: each marker is extrapolated from the last
-      ``MARKER_FIT_FRAMES`` frames at or before the window end by a
-      least-squares polynomial of degree ``MARKER_FIT_DEGREE`` in time,
-      at the marker rate: by default the straight line through the last
-      two frames (constant velocity). A marker whose last frame is missing
-      is not extrapolated (its gap runs to the edge, as before).
+    - markers: from the second stance on, each marker repeats what it did
+      after the previous hop's take-off, anchored to the last frames
+      (:func:`_templated_markers`); for the first stance (no hop before it
+      in the window), a marker without a finite template, or a previous
+      flight shorter than ``TEMPLATE_MIN_S``, it is extrapolated from the
+      last ``MARKER_FIT_FRAMES`` frames at or before the window end by a
+      least-squares polynomial of degree ``MARKER_FIT_DEGREE`` in time, at
+      the marker rate: by default the straight line through the last two
+      frames (constant velocity). A marker whose last frame is missing is
+      not extrapolated (its gap runs to the edge, as before).
 
     Measured by ``bench/low_latency_windows.py`` (36 cells of k0/k1 median
-    recovery errors against batch; cells moved by more than 2 percentage
-    points): at PAD = 5 / 10 / 20 / 50 / 70 ms 25 / 19 / 10 / 2 / 0 with the
-    straight line through 2 frames; at 5 / 20 / 50 ms 24 / 14 / 3 with a
-    quadratic through 4 frames (bench/low_latency_windows.py --marker-fit 2 4; largest move clean
-    7.8 / 6.7 / 0.2 pp, noisy 34.6 / 30.2 / 5.8 pp, against 43.4 / 6.3 / 0.4
-    and 61.0 / 13.4 / 2.8 pp with the line). The force treatment alone is exact: with the
-    recorded markers after the window end (bench/low_latency_windows.py 0.005 --true-markers-s 0.3)
-    0 of 36 move (largest 0.1 pp clean, 1.9 pp noisy). The markers are the
-    limit: around a take-off the segment angular accelerations change within
-    a few marker frames (the plate force drops), the batch filters average
-    the motion of the following flight into the stance's end, and no
-    extrapolation from the frames before the take-off knows that motion.
-    Also tried in scratch runs and not kept, as no better at 5 ms: the
-    filter's own odd padding (point reflection about the last frame),
-    higher-degree polynomials, and a ballistic model (whole-body centre of
-    mass moving with F/m - g, segment angles continued by a polynomial, toe
-    placed where the COM puts it).
+    recovery errors against batch; docs/pipeline.md "Batch vs low-latency"
+    has the figures and what else was tried). The force treatment alone is
+    exact (the recorded markers after the window end: 0 of 36 cells move);
+    the markers are the limit: around a take-off the segment angular
+    accelerations change within a few marker frames, the batch filters
+    average the following flight's motion into the stance's end, and an
+    extrapolation from the frames before the take-off only guesses it.
 
     Returns a new :class:`SpanData`; ``span`` is not changed.
     """
@@ -477,6 +473,8 @@ def extend_past_window(span: SpanData, stances: list[Stance], k: int, options: A
     tm, xz = span.marker_t_s, span.markers_xz
     assert xz is not None  # set together with marker_t_s
     tm_ext, xz_ext = _extrapolated_markers(tm, xz, t_ext[-1])
+    if MARKER_TEMPLATE and k > 0:
+        xz_ext = _templated_markers(tm, xz, tm_ext, xz_ext, stances[k - 1], stances[k])
     out.marker_t_s, out.markers_xz = np.concatenate([tm, tm_ext]), np.concatenate([xz, xz_ext])
     return out
 
@@ -518,6 +516,63 @@ def _extrapolated_markers(tm: np.ndarray, xz: np.ndarray, end_s: float) -> tuple
         coef = np.polynomial.polynomial.polyfit(tm[last] - tm[-1], xz[last, m], deg)
         xz_ext[:, m] = np.polynomial.polynomial.polyval(tm_ext - tm[-1], coef).T
     return tm_ext, xz_ext
+
+
+#: Continue the markers past a short window's end by the previous hop's motion after its take-off
+#: (:func:`_templated_markers`); False: the straight line of :func:`_extrapolated_markers` only.
+MARKER_TEMPLATE = True
+#: Frames at the window end the template is anchored to: its offset and drift (velocity) are fitted to them.
+MARKER_TEMPLATE_FRAMES = 2
+#: The template stops this long before the previous flight's end (s): the landing is not part of it.
+TEMPLATE_MARGIN_S = 0.01
+#: Shortest previous flight (s, after the margin) worth a template; shorter: the straight line.
+TEMPLATE_MIN_S = 0.02
+#: The window starts this long before the previous take-off (s), so the template covers the anchor frames.
+TEMPLATE_LEAD_S = 0.08
+
+
+def _templated_markers(tm: np.ndarray, xz: np.ndarray, tm_ext: np.ndarray, xz_ext: np.ndarray,
+                       prev: Stance, cur: Stance) -> np.ndarray:
+    """Markers past the window end continued by the previous hop's motion after its take-off (m).
+
+    Hopping repeats itself: what each marker did after the previous
+    take-off is the best guess of what it does after this one. The
+    previous hop's frames (in the window: it starts ``TEMPLATE_LEAD_S``
+    before the previous take-off) are splined (cubic) against the time
+    from that take-off, evaluated at the same times from this take-off
+    (up to the previous flight's end less ``TEMPLATE_MARGIN_S``, then on
+    at the template's last velocity), and anchored to this stance's last
+    ``MARKER_TEMPLATE_FRAMES`` frames by a fitted offset and drift (with 2
+    frames: the last frame's position and the last two frames' velocity).
+    This carries the take-off's segment accelerations, which the straight
+    line (``xz_ext``, returned for markers without a finite template or
+    anchor) sets to zero. Uses only frames at or before the window end.
+
+    Measured (bench/low_latency_windows.py, 36 recovery cells against batch, PAD 5 ms):
+    see :func:`extend_past_window`.
+    """
+    from scipy.interpolate import CubicSpline
+
+    length = min(TAIL_S, cur.touchdown_s - prev.takeoff_s - TEMPLATE_MARGIN_S)
+    sel = (tm >= prev.takeoff_s - TEMPLATE_LEAD_S) & (tm <= prev.takeoff_s + length + 0.03)
+    n_fit = min(MARKER_TEMPLATE_FRAMES, tm.size)
+    r_fit = tm[-n_fit:] - cur.takeoff_s
+    if length < TEMPLATE_MIN_S or sel.sum() < 6 or r_fit[0] < tm[sel][0] - prev.takeoff_s:
+        return np.asarray(xz_ext)
+    r = np.minimum(tm_ext - cur.takeoff_s, length)
+    beyond = np.maximum(tm_ext - cur.takeoff_s - length, 0.0)
+    anchor = np.column_stack([np.ones(n_fit), tm[-n_fit:] - tm[-1]])[:, : min(n_fit, 2)]
+    ahead = np.column_stack([np.ones(tm_ext.size), tm_ext - tm[-1]])[:, : anchor.shape[1]]
+    out: np.ndarray = xz_ext.copy()
+    usable = [m for m in range(xz.shape[1]) if np.isfinite(xz[sel, m]).all() and np.isfinite(xz[-n_fit:, m]).all()]
+    if not usable:
+        return out
+    spline = CubicSpline(tm[sel] - prev.takeoff_s, xz[sel][:, usable], axis=0)
+    residual = xz[-n_fit:][:, usable] - spline(r_fit)  # (n_fit, markers, 2)
+    coef, *_ = np.linalg.lstsq(anchor, residual.reshape(n_fit, -1), rcond=None)
+    out[:, usable] = (spline(r) + beyond[:, None, None] * spline(length, 1)[None]
+                      + (ahead @ coef).reshape((tm_ext.size,) + residual.shape[1:]))
+    return out
 
 
 def analyze_short_window(
