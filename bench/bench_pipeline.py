@@ -161,7 +161,8 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> str:
     return (f"take-off -> /impedance/controller p50 {np.percentile(ok, 50):.1f} ms, p99 {np.percentile(ok, 99):.1f} ms, "
             f"max {ok.max():.1f} ms over {ok.size} of {len(events)} stances (first included); before the next touchdown "
             f"{sum(before_next)}/{len(before_next)}; fit of 3 joints p50/p99 {d('/impedance_estimator', 'fit_p50_ms')}/"
-            f"{d('/impedance_estimator', 'fit_p99_ms')} ms; pipeline's own take-off to profile p50/p99 "
+            f"{d('/impedance_estimator', 'fit_p99_ms')} ms (CPU {d('/impedance_estimator', 'fit_cpu_p50_ms')}/"
+            f"{d('/impedance_estimator', 'fit_cpu_p99_ms')} ms); pipeline's own take-off to profile p50/p99 "
             f"{d('/impedance_estimator', 'takeoff_to_profile_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_profile_p99_ms')} ms; "
             f"load average {load:.1f} on {os.cpu_count()} cores")
 

@@ -123,11 +123,11 @@ class ImpedanceEstimatorNode(Node):
             "given (model_terms_<joint>; default: the seed's reduced model, its Eq. 10, fitted to every stance so "
             "the coefficients mean the same in each; model_warmup_stances N chooses from the first N stances)")
         self._stance_solvers: dict = {}  # OSQP workspaces of the per-stance reductions (warm start)
-        self.fit_s: list[float] = []
+        self.fit_s: list[float] = []  # per stance: the fit's wall time (the feed waits for it), and below its CPU time
+        self.fit_cpu_s: list[float] = []
         self.latency_s: list[float] = []
         self.stances_in = 0
-        self.accepted = np.zeros(3, int)
-        self.rejected = np.zeros(3, int)
+        self.accepted, self.rejected = np.zeros(3, int), np.zeros(3, int)
         side = declare(self, "side", "lumped", "controller feed: which leg the values are for (lumped, left, right)")
         if side not in ("lumped", "left", "right"):
             raise ValueError(f"parameter side must be lumped, left or right, got {side!r}")
@@ -167,7 +167,7 @@ class ImpedanceEstimatorNode(Node):
             # the provisional take-off was a dip: its fits leave the pools; the feed turns invalid below
             for name, fit in self.last_pooled[1].items():
                 self.pools[name].withdraw(fit)
-        t_start = time.perf_counter()
+        t_start, cpu_start = time.perf_counter(), time.thread_time()
         self.stances_in += 1
         stance = stance_from_message(msg)
         was_fixed = self.selector.fixed
@@ -176,6 +176,7 @@ class ImpedanceEstimatorNode(Node):
             self.get_logger().info("model structure: " + "; ".join(
                 f"{j} {' '.join(s.terms)} ({s.reason})" for j, s in self.selector.structures.items()))
         self.fit_s.append(time.perf_counter() - t_start)
+        self.fit_cpu_s.append(time.thread_time() - cpu_start)
         latency = (time.time_ns() - msg.takeoff_received_ns) * 1e-9 if msg.takeoff_received_ns else math.nan
         if math.isfinite(latency) and not withdrawn:
             self.latency_s.append(latency)
@@ -251,6 +252,7 @@ class ImpedanceEstimatorNode(Node):
     def _diag_values(self) -> dict:
         out: dict[str, object] = {"stances_received": self.stances_in,
                "fit_p50_ms": percentile_ms(self.fit_s, 50), "fit_p99_ms": percentile_ms(self.fit_s, 99),
+               "fit_cpu_p50_ms": percentile_ms(self.fit_cpu_s, 50), "fit_cpu_p99_ms": percentile_ms(self.fit_cpu_s, 99),
                "takeoff_to_profile_p50_ms": percentile_ms(self.latency_s, 50),
                "takeoff_to_profile_p99_ms": percentile_ms(self.latency_s, 99)}
         for j, name in enumerate(JOINT_NAMES):
