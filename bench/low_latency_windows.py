@@ -23,6 +23,9 @@ only; ``--exclude-takeoff E`` leaves the last E s before take-off out of the sho
 each short window the recorded marker frames up to ``H`` s past its end (not known live), e.g.
 ``0.005 --true-markers-s 0.3``: the force treatment alone, with markers as in batch.
 
+``--stance-cost`` only times one stance's short-window analysis on the bundled 2.2 Hz recording
+(CPU of this thread, straight line vs template): what the live stage spends per stance.
+
 CPU: about 25 s per frequency per analysis (batch + each PAD), as recovery_errors.py.
 """
 
@@ -50,6 +53,28 @@ def medians(results) -> dict:
     return {(label, j): np.median(100 * r.error_array(j), axis=0) for label, r in results.items() for j in JOINTS}
 
 
+def stance_cost(pad: float, repeats: int = 5) -> None:
+    """CPU time (this thread) of one short-window analysis, straight line vs template, on the bundled 2.2 Hz recording."""
+    from hop_impedance.biomech.stance_detection import Stance
+    from hop_impedance.io.recording_io import load_recording
+
+    rec = load_recording(Path(__file__).resolve().parents[1] / "recordings" / "sim_2p20hz_hard.mcap")
+    batch = analysis.analyze_recording(rec)
+    data, options = analysis.recording_span(rec), analysis.AnalysisOptions(post_takeoff_s=pad)
+    stances = [Stance(s.touchdown_s, s.takeoff_s, s.complete) for s in batch.stances]
+    for template in (False, True):
+        analysis.MARKER_TEMPLATE, cpu = template, []
+        for _ in range(repeats):
+            for k in range(1, len(stances)):
+                c0 = time.thread_time()
+                analysis.analyze_short_window(data, stances, k, batch.model, rec.subject.body_mass_kg, options)
+                cpu.append(time.thread_time() - c0)
+        print(f"PAD {pad * 1e3:g} ms, {'template' if template else 'straight line'}: analysis of one stance "
+              f"(filters, kinematics, inverse dynamics) CPU p50 {np.median(cpu) * 1e3:.2f} ms, "
+              f"p99 {np.percentile(cpu, 99) * 1e3:.2f} ms over {len(cpu)}")
+    analysis.MARKER_TEMPLATE = True
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("pads", type=float, nargs="+", metavar="PAD", help="window end after take-off (s)")
@@ -66,7 +91,12 @@ def main() -> None:
                         help="anchor the previous hop's post-take-off motion to the last FRAMES frames (0: straight line only)")
     parser.add_argument("--exclude-takeoff", type=float, default=0.0, metavar="E",
                         help="short windows only: leave the last E s before take-off out of the fit's objective")
+    parser.add_argument("--stance-cost", action="store_true",
+                        help="only time one stance's short-window analysis (straight line vs template) and stop")
     args = parser.parse_args()
+    if args.stance_cost:
+        stance_cost(args.pads[0])
+        return
     if args.template is not None:
         analysis.MARKER_TEMPLATE, analysis.MARKER_TEMPLATE_FRAMES = args.template > 0, max(args.template, 1)
     if args.marker_fit:
