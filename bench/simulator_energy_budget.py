@@ -88,7 +88,7 @@ def lossless_config(freq_hz: float, hops: int, trunk: float, flight: str, seed_l
 
     options = {"trunk_balance": TrunkBalance(trunk) if trunk else None}
     if seed_like:
-        options = {k: v for k, v in seed_like_options().items() if k != "push_timing"}
+        options = {k: v for k, v in seed_like_options().items() if k not in ("push_timing", "bell_activation_min")}
         if balance == "hip_spring":
             options = {**options, "trunk_balance": None, "hip_trunk_spring_nm_rad": HIP_TRUNK_SPRING_NM_RAD}
     chain, config = hopping_config(freq_hz, "hard", hops, Effects(damping=False, push_off=False), variability=False,

@@ -111,12 +111,18 @@ CHAIN_POINTS = [MARKER_NAMES.index(n) for n in ("toe", "ankle", "knee", "hip", "
 
 def measure(freq_hz: float, hops: int = 6, seed: int = 1, trunk: bool = False, flight: str = "prescribed",
             posture=DEFAULT_TOUCHDOWN_RHO, contact_ahead_m: float = 0.0, push_timing=PUSH_OFF_TIMING,
-            effects: Effects = Effects()) -> dict:
+            effects: Effects = Effects(), bell_activation_min: float | None = None, fits: bool = False) -> dict:
     """Mean per-hop figures that the analysis measures on a noise-free simulated recording (hard surface)."""
     rec, truth = simulate_recording(freq_hz, "hard", hops, seed=seed, sensors=noise_free(SensorConfig()), effects=effects,
                                     touchdown_rho_rad=posture, trunk_balance=TRUNK_BALANCE if trunk else None,
-                                    flight=flight, contact_ahead_m=contact_ahead_m, push_timing=push_timing)
-    doc = analysis_to_json(analyze_recording(rec))
+                                    flight=flight, contact_ahead_m=contact_ahead_m, push_timing=push_timing,
+                                    bell_activation_min=bell_activation_min)
+    analysis = analyze_recording(rec)
+    doc = analysis_to_json(analysis)
+    if fits:  # the per-stance Eq. 3 fit that `hop-impedance analyze` adds, with k0, k1, b0 for every joint
+        from hop_impedance.cli.analyze_cmd import add_fits_to_json
+
+        add_fits_to_json(doc, analysis, ["k0", "k1", "b0"])
     mass = doc["subject"]["body_mass_kg"]
     stances = [s for s in doc["stances"] if s["complete"] and s["joints"]][1:]  # the first lands from the lead-in
     if not stances:
@@ -140,8 +146,9 @@ def measure(freq_hz: float, hops: int = 6, seed: int = 1, trunk: bool = False, f
             "push_j": np.array([j["push_work_j"] for j in joints]),
             "moment_integral_nm_s": np.trapezoid(moment, t, axis=0),
             "freq_hz": s["hop_frequency_hz"],
+            **({f"fit_{c}": np.array([j["fit"]["coefficients"][c] for j in joints]) for c in ("k0", "k1")} if fits else {}),
         })
-    mean = {k: np.mean([r[k] for r in rows], axis=0) for k in rows[0]}
+    mean = {k: (np.median if k.startswith("fit_") else np.mean)([r[k] for r in rows], axis=0) for k in rows[0]}
     # Joint angles over whole hop cycles (touchdown of the first averaged stance to that of the last), from markers.
     start, end = stances[0]["touchdown_s"], stances[-1]["touchdown_s"]
     t_m = (rec.markers.stamp_ns - doc["recording"]["start_ns"]) * 1e-9
@@ -212,6 +219,14 @@ def table(results: dict, hopexo: dict) -> str:
     for j, name in enumerate(("ankle", "knee", "hip")):
         row(f"{name} push-phase energy (J) / seed brake (seed: push = brake)",
             [results[f]["push_j"][j] for f in fs], [SEED_TABLE1[f]["brake_j"][j] for f in fs], "{:.1f}")
+    if any("fit_k0" in results[f] for f in fs):
+        from hop_impedance.simulation.scenarios import SEED_TABLE2
+
+        for c in ("k0", "k1"):
+            for j, name in enumerate(("ankle", "knee", "hip")):
+                row(f"{name} fitted {c} (per-stance Eq. 3 fit k0+k1+b0, median; seed Table 2)",
+                    [results[f].get(f"fit_{c}", np.full(3, np.nan))[j] for f in fs],
+                    [SEED_TABLE2[min(SEED_TABLE2, key=lambda t: abs(t - f))][c][j] for f in fs], "{:.0f}")
     row("leg stiffness, peak F / COM-toe compression (kN/m)", [results[f]["k_leg"] / 1000 for f in fs],
         [9.8, 14.6, 20.9], "{:.1f}")
     r = results[2.4]
@@ -342,8 +357,14 @@ def main() -> None:
                              "then vary it)")
     parser.add_argument("--push-timing", default=None,
                         help="push-off onset, duration as fractions of the passive stance, e.g. 0.4,0.4 (after --seed-like)")
+    parser.add_argument("--bell", type=float, default=None, metavar="A_MIN",
+                        help="the bell activation from A_MIN at touchdown over the passive stance "
+                             "(hopping_config bell_activation_min; --seed-like: scenarios.SEED_LIKE_BELL_MIN, 0.7; "
+                             "1 = no bell)")
     parser.add_argument("--activation", action="store_true",
                         help="with the time-based activation of the elastic moment (scenarios.ACTIVATION, Effects)")
+    parser.add_argument("--fits", action="store_true",
+                        help="also the per-stance Eq. 3 fits (k0, k1, b0) that analyze adds, medians against Table 2")
     parser.add_argument("--freqs", default=None,
                         help="measure only these of 1.53,1.87,2.2,2.4 (the others print as nan; not with --write)")
     args = parser.parse_args()
@@ -353,18 +374,23 @@ def main() -> None:
     if args.posture:
         a, k, h = (float(v) for v in args.posture.split(","))
         posture = (a, np.pi + k, np.pi + h)
+    bell_override = None
     if args.seed_like:
         opts = seed_like_options()
         args.trunk, contact, posture, push_timing = True, opts["contact_ahead_m"], opts["touchdown_rho_rad"], opts["push_timing"]
+        bell_override, args.bell = args.bell, opts["bell_activation_min"] if args.bell is None else args.bell
+    if args.bell == 1.0:  # a(t) = 1: no bell (and room for --activation)
+        args.bell = None
         args.contact = "toe_tip"
     if args.push_timing:
         push_timing = tuple(float(v) for v in args.push_timing.split(","))
     if args.posture and args.seed_like:  # a posture trial on the seed-like hopper
         a, k, h = (float(v) for v in args.posture.split(","))
         posture = (a, np.pi + k, np.pi + h)
-    if args.write and (args.freqs or args.push_timing or args.activation or (args.posture and args.seed_like)):
+    if args.write and (args.freqs or args.push_timing or args.activation or (args.posture and args.seed_like)
+                       or (args.seed_like and bell_override is not None)):
         parser.error("--write writes the chosen configuration only: not with --freqs, --push-timing, --activation, "
-                     "or --posture with --seed-like")
+                     "or --posture / --bell with --seed-like")
     wanted = None if args.freqs is None else [float(v) for v in args.freqs.split(",")]
     t0 = time.perf_counter()
     results = {}
@@ -374,7 +400,8 @@ def main() -> None:
             continue
         try:
             results[f] = measure(f, trunk=args.trunk, flight=args.flight, posture=posture, contact_ahead_m=contact,
-                                 push_timing=push_timing, effects=Effects(time_activation=args.activation))
+                                 push_timing=push_timing, effects=Effects(time_activation=args.activation),
+                                 bell_activation_min=args.bell, fits=args.fits)
         except ValueError as exc:  # e.g. no calibrated hop, or a trial that stops before a second stance
             results[f] = failed(f, str(exc))
     hopexo = hopexo_means()
@@ -385,6 +412,7 @@ def main() -> None:
              f"ground contact {'at the toe marker' if not contact else f'{contact:.3f} m ahead of the toe marker (toe tip)'}, "
              f"push-off from {push_timing[0]:.0%} for {push_timing[1]:.0%} of the passive stance, "
              f"{'time-based activation, ' if args.activation else ''}"
+             f"{'' if args.bell is None else f'bell activation from {args.bell:g} at touchdown, '}"
              f"{min(r['n_stances'] for r in results.values())}-{max(r['n_stances'] for r in results.values())} "
              "analysed stances per frequency")
     print(text)

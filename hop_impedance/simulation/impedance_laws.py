@@ -120,6 +120,42 @@ class TimeActivation:
         return self.a_min + (1.0 - self.a_min) * (1.0 - np.exp(-t / self.tau_s))
 
 
+@dataclass(frozen=True)
+class BellActivation:
+    """Activation that peaks within the stance and is lower at its edges (issue 17's seed-like hopper).
+
+    ``a(t) = a_min + (1 - a_min) sin^2(pi t / duration)`` for ``0 <= t <= duration``, ``a_min`` after: the
+    elastic moment is that fraction of Eq. 3's. The shape is seed 000's bell-shaped stiffness in time with
+    non-zero edges (its Fig. 5; the discovery model's ``activation_shape="bell"``): the extensors are
+    pre-activated at touchdown (``a_min``, the seed's "initial joint stiffness ... pre-activation"), fully
+    active around maximal flexion, and relax before take-off. Over a stance mirror-symmetric about
+    ``duration / 2`` the loading and unloading works cancel (unlike :class:`TimeActivation`, whose rise makes
+    the springs do net positive work), and the force peaks more than a spring's: the seed's peak GRF over its
+    mean in stance is 1.75-2.17, a linear spring-mass's at most 2.
+
+    Attributes
+    ----------
+    a_min : float
+        Activation at touchdown and after ``duration_s``, 0 <= a_min <= 1.
+    duration_s : float
+        Length of the bell (s), > 0 (:func:`~hop_impedance.simulation.scenarios.hopping_config`: the passive
+        stance's).
+    """
+
+    a_min: float
+    duration_s: float
+
+    def __post_init__(self) -> None:
+        if not (0.0 <= self.a_min <= 1.0 and self.duration_s > 0):
+            raise ValueError(f"bell activation needs 0 <= a_min <= 1 and duration_s > 0, got {self.a_min}, "
+                             f"{self.duration_s}")
+
+    def value(self, t_s: np.ndarray) -> np.ndarray:
+        """a(t) (dimensionless); ``t_s`` is time since touchdown (s)."""
+        phase = np.clip(np.asarray(t_s, float) / self.duration_s, 0.0, 1.0)
+        return self.a_min + (1.0 - self.a_min) * np.sin(np.pi * phase) ** 2
+
+
 def _as3(x: object) -> np.ndarray:
     arr = np.broadcast_to(np.asarray(x, float), (3,)).copy()
     if not np.all(np.isfinite(arr)):
@@ -144,7 +180,7 @@ class Eq3Law(ImpedanceLaw):
     b1: np.ndarray = field(default_factory=lambda: np.zeros(3))
     b2: np.ndarray = field(default_factory=lambda: np.zeros(3))
     b3: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    activation: TimeActivation | None = None
+    activation: TimeActivation | BellActivation | None = None
 
     n_states = 3
 

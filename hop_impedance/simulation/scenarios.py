@@ -21,6 +21,7 @@ from hop_impedance.simulation.dynamics import Chain, chain_from_body_model, cont
 from hop_impedance.simulation.ground import GroundLaw, surface
 from hop_impedance.simulation.hopping_trial import HoppingConfig, joint_triple, touchdown_posture, touchdown_state
 from hop_impedance.simulation.impedance_laws import (
+    BellActivation,
     CompositeLaw,
     Eq3Law,
     ImpedanceLaw,
@@ -88,6 +89,10 @@ def toe_tip_ahead_m(subject: Subject = SEED_SUBJECT) -> float:
 SEED_LIKE_TOUCHDOWN_RHO = (1.24, np.pi + 0.68, np.pi + 0.42)
 #: Push-off late in stance (issue 17): from 50 % of the passive stance to its end, after maximal flexion.
 LATE_PUSH_OFF_TIMING = (0.5, 0.5)
+#: Issue 17 candidate: the bell activation's value at touchdown (:class:`BellActivation` over the passive stance;
+#: ``hopping_config(bell_activation_min=...)``). 0.7: with 0.5 the 1.53 Hz ankle and knee flex and load too
+#: much (bench/simulator_realism.py --seed-like --bell 0.5); docs/simulator.md.
+SEED_LIKE_BELL_MIN = 0.7
 
 
 def seed_like_options(subject: Subject = SEED_SUBJECT) -> dict:
@@ -97,12 +102,17 @@ def seed_like_options(subject: Subject = SEED_SUBJECT) -> dict:
     virtual hinge, :func:`toe_tip_ahead_m`), which lengthens the force's lever about the ankle to the
     seed's 0.17-0.19 m and so softens the leg vertically; a touchdown posture with the knee and hip
     flexed (:data:`SEED_LIKE_TOUCHDOWN_RHO`); the trunk-balance moment (hands on the waist,
-    :data:`TRUNK_BALANCE`); the push-off late in stance (:data:`LATE_PUSH_OFF_TIMING`). One set for all
-    frequencies; the joint laws stay seed Table 2. Not the default (bench/simulator_realism.py
-    --seed-like measures it against seed Table 1).
+    :data:`TRUNK_BALANCE`); the push-off late in stance (:data:`LATE_PUSH_OFF_TIMING`); the extensors'
+    activation bell-shaped over the stance (:data:`SEED_LIKE_BELL_MIN`: pre-activated to 0.7 at touchdown,
+    full at mid-stance, :class:`~hop_impedance.simulation.impedance_laws.BellActivation`), which makes the
+    force peak like the seed's rather than like a linear spring's. One set for all frequencies; the joint
+    laws stay seed Table 2, scaled by the activation. Not the default (bench/simulator_realism.py
+    --seed-like measures it against seed Table 1). A lossless trial leaves out ``push_timing`` and
+    ``bell_activation_min`` (both active).
     """
     return {"touchdown_rho_rad": SEED_LIKE_TOUCHDOWN_RHO, "trunk_balance": TRUNK_BALANCE,
-            "contact_ahead_m": toe_tip_ahead_m(subject), "push_timing": LATE_PUSH_OFF_TIMING}
+            "contact_ahead_m": toe_tip_ahead_m(subject), "push_timing": LATE_PUSH_OFF_TIMING,
+            "bell_activation_min": SEED_LIKE_BELL_MIN}
 
 
 @dataclass(frozen=True)
@@ -143,9 +153,12 @@ def seed_stiffness(freq_hz: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_duration_s: float,
-              hip_trunk_spring_nm_rad: float = 0.0) -> ImpedanceLaw:
+              hip_trunk_spring_nm_rad: float = 0.0, bell: BellActivation | None = None) -> ImpedanceLaw:
     """The joint law for a frequency with the chosen effects (``hip_trunk_spring_nm_rad`` is added to the
-    hip's k0: :data:`HIP_TRUNK_SPRING_NM_RAD`)."""
+    hip's k0: :data:`HIP_TRUNK_SPRING_NM_RAD`; ``bell`` scales the elastic moment, instead of
+    :data:`ACTIVATION`, which it excludes)."""
+    if bell is not None and effects.time_activation:
+        raise ValueError("one activation per law: the bell excludes Effects.time_activation")
     k0, k1 = seed_stiffness(freq_hz)
     k0 = k0 + np.array([0.0, 0.0, hip_trunk_spring_nm_rad])
     eq3 = Eq3Law(
@@ -155,7 +168,7 @@ def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_durati
         k3=np.array(EXTRA_K3 if effects.rate_dependent_stiffness else 0.0),
         b0=np.array(DAMPING_B0 if effects.damping else 0.0),
         b1=np.array(EXTRA_B1 if effects.nonlinear_damping else 0.0),
-        activation=ACTIVATION if effects.time_activation else None,
+        activation=ACTIVATION if effects.time_activation else bell,
     )
     if not effects.push_off:
         return CompositeLaw((eq3,))
@@ -189,6 +202,7 @@ def hopping_config(
     contact_ahead_m: float = 0.0,
     push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     hip_trunk_spring_nm_rad: float = 0.0,
+    bell_activation_min: float | None = None,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
@@ -199,19 +213,20 @@ def hopping_config(
     ``unexpected_surface`` the listed hops land on that surface instead.
     ``trunk_balance`` (e.g. :data:`TRUNK_BALANCE`) and ``flight`` are passed to
     :class:`HoppingConfig` (defaults: none, prescribed flight). ``contact_ahead_m``
-    moves the ground contact that far in front of the toe marker
-    (:func:`~hop_impedance.simulation.dynamics.contact_ahead_of_toe_marker`; e.g.
-    :data:`TOE_TIP_AHEAD_M`, the seed's hinge at the tip of the toe; default 0, the marker).
+    moves the ground contact that far in front of the toe marker (:func:`contact_ahead_of_toe_marker`;
+    e.g. :func:`toe_tip_ahead_m`, the seed's hinge at the tip of the toe; default 0, the marker).
     ``hip_trunk_spring_nm_rad`` (e.g. :data:`HIP_TRUNK_SPRING_NM_RAD`) holds the trunk by a hip spring
     about the touchdown hip angle, added to the Table 2 hip k0 (so the truth file's hip law is the whole
-    hip law): the conservative alternative to ``trunk_balance`` (default 0, none).
+    hip law): the conservative alternative to ``trunk_balance`` (default 0, none). ``bell_activation_min``
+    (:data:`SEED_LIKE_BELL_MIN`; None: none): a :class:`BellActivation` from it over the passive stance.
     """
     chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
     expected = surface(calibration_surface or surface_name)
     passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0,
                         hip_trunk_spring_nm_rad)
     ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
-    law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts, hip_trunk_spring_nm_rad)
+    bell = None if bell_activation_min is None else BellActivation(bell_activation_min, ts)
+    law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts, hip_trunk_spring_nm_rad, bell)
     config = HoppingConfig(
         freq_hz=freq_hz,
         n_hops=n_hops,

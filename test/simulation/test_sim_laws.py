@@ -8,6 +8,7 @@ from scipy.integrate import cumulative_trapezoid, solve_ivp
 
 from hop_impedance.simulation.ground import HARD, RIGID, SOFT, GroundLaw, lossless, surface
 from hop_impedance.simulation.impedance_laws import (
+    BellActivation,
     CompositeLaw,
     Eq3Law,
     PushOff,
@@ -114,3 +115,29 @@ def test_rigid_surface_penetration_is_about_a_millimetre_at_three_body_weights()
     assert 0.5e-3 < pen < 2e-3
     assert RIGID.force_n(-1e-9, -1.0) < 1.0  # Hunt-Crossley: no force jump at touchdown
     assert lossless(HARD).damping_n_s_m == 0.0
+
+
+def test_bell_activation_does_no_net_work_over_a_symmetric_stance():
+    """Issue 17's bell activation (seed 000's bell-shaped stiffness in time): a_min at touchdown and at the end of
+    its duration, 1 at mid-stance; over a flexion-extension mirror-symmetric about mid-stance the Eq. 3 spring
+    scaled by it returns what it took (work ~ 0, to the quadrature's accuracy), while seed 001's rising
+    activation (TimeActivation) makes the same spring do net positive work (loaded softer than unloaded)."""
+    t_stance = 0.26
+    bell = BellActivation(a_min=0.7, duration_s=t_stance)
+    assert bell.value(np.array([0.0, t_stance / 2, t_stance, 2 * t_stance])) == pytest.approx([0.7, 1.0, 0.7, 0.7])
+    t = np.linspace(0.0, t_stance, 20001)
+    rho = 0.5 * np.sin(np.pi * t / t_stance)  # ankle flexion since touchdown (rad), back to zero at take-off
+    omega = np.gradient(rho, t)
+    ref = TouchdownReference(np.zeros(3), np.zeros(3))
+    rho3, omega3 = np.repeat(rho[:, None], 3, axis=1), np.repeat(omega[:, None], 3, axis=1)
+
+    def work_on_body_j(activation) -> float:
+        law = Eq3Law(k0=np.full(3, 301.0), k1=np.full(3, 948.0), activation=activation)
+        moment = law.moments_nm(t, rho3, omega3, np.zeros((len(t), 3)), ref)[:, 0]
+        return float(np.trapezoid(-moment * omega, t))  # extensor moment against flexion: power -M omega
+
+    loading = float(np.trapezoid((301.0 * rho + 474.0 * rho**2) * omega * (t < t_stance / 2), t))
+    assert abs(work_on_body_j(bell)) < 1e-6 * loading
+    assert work_on_body_j(TimeActivation(a_min=0.3, tau_s=0.04)) > 0.05 * loading
+    with pytest.raises(ValueError):
+        BellActivation(a_min=1.2, duration_s=0.2)

@@ -29,7 +29,7 @@ from hop_impedance.simulation.scenarios import HIP_TRUNK_SPRING_NM_RAD, Effects,
 
 
 def lossless_trial(hops: int, hip_spring: bool):
-    options = {k: v for k, v in seed_like_options().items() if k != "push_timing"}
+    options = {k: v for k, v in seed_like_options().items() if k not in ("push_timing", "bell_activation_min")}
     if hip_spring:
         options = {**options, "trunk_balance": None, "hip_trunk_spring_nm_rad": HIP_TRUNK_SPRING_NM_RAD}
     chain, config = hopping_config(2.2, "hard", hops, Effects(damping=False, push_off=False), variability=False,
