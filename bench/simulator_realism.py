@@ -7,6 +7,8 @@ Usage::
     .venv/bin/python bench/simulator_realism.py --trunk            # with the trunk-balance moment
     .venv/bin/python bench/simulator_realism.py --flight energy_keeping
     .venv/bin/python bench/simulator_realism.py --seed-like       # issue 17 candidate (scenarios.seed_like_options)
+    .venv/bin/python bench/simulator_realism.py --seed-like --write   # its tables into docs/simulator.md
+    .venv/bin/python bench/simulator_realism.py --seed-like --bell 1 --fits --freqs 1.53,1.87,2.2  # without the bell, with fits
 
 Every simulated figure is measured by the analysis (``hop-impedance analyze``:
 ``analyze_recording`` + ``io.analyze_json.analysis_to_json``, stance detection and 2D inverse
