@@ -152,14 +152,32 @@ def seed_stiffness(freq_hz: float) -> tuple[np.ndarray, np.ndarray]:
             np.array([np.interp(f, freqs, k1[:, j]) for j in range(3)]))
 
 
+def law_scale_at(law_scale: dict | None, freq_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Factors on Table 2's k0 and k1 per joint at ``freq_hz`` from a table ``{freq: (k0 factors, k1 factors)}``.
+
+    Linearly interpolated in frequency and clamped at the table's ends, as :func:`seed_stiffness`
+    interpolates Table 2; None: ones (the law is Table 2). E.g. :data:`SEED_LIKE_LAW_SCALE`.
+    """
+    if not law_scale:
+        return np.ones(3), np.ones(3)
+    freqs = np.array(sorted(law_scale))
+    f = float(np.clip(freq_hz, freqs[0], freqs[-1]))
+    table = np.array([np.asarray(law_scale[g], float).reshape(2, 3) for g in freqs])
+    out = np.array([[np.interp(f, freqs, table[:, i, j]) for j in range(3)] for i in range(2)])
+    return out[0], out[1]
+
+
 def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_duration_s: float,
-              hip_trunk_spring_nm_rad: float = 0.0, bell: BellActivation | None = None) -> ImpedanceLaw:
+              hip_trunk_spring_nm_rad: float = 0.0, bell: BellActivation | None = None,
+              law_scale: dict | None = None) -> ImpedanceLaw:
     """The joint law for a frequency with the chosen effects (``hip_trunk_spring_nm_rad`` is added to the
     hip's k0: :data:`HIP_TRUNK_SPRING_NM_RAD`; ``bell`` scales the elastic moment, instead of
-    :data:`ACTIVATION`, which it excludes)."""
+    :data:`ACTIVATION`, which it excludes; ``law_scale`` multiplies Table 2's k0 and k1, :func:`law_scale_at`)."""
     if bell is not None and effects.time_activation:
         raise ValueError("one activation per law: the bell excludes Effects.time_activation")
     k0, k1 = seed_stiffness(freq_hz)
+    s0, s1 = law_scale_at(law_scale, freq_hz)
+    k0, k1 = k0 * s0, k1 * s1
     k0 = k0 + np.array([0.0, 0.0, hip_trunk_spring_nm_rad])
     eq3 = Eq3Law(
         k0=k0,
@@ -203,6 +221,7 @@ def hopping_config(
     push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     hip_trunk_spring_nm_rad: float = 0.0,
     bell_activation_min: float | None = None,
+    law_scale: dict | None = None,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
@@ -219,14 +238,17 @@ def hopping_config(
     about the touchdown hip angle, added to the Table 2 hip k0 (so the truth file's hip law is the whole
     hip law): the conservative alternative to ``trunk_balance`` (default 0, none). ``bell_activation_min``
     (:data:`SEED_LIKE_BELL_MIN`; None: none): a :class:`BellActivation` from it over the passive stance.
+    ``law_scale`` (:data:`SEED_LIKE_LAW_SCALE`; None: Table 2 as is): factors on Table 2's k0 and k1
+    (:func:`law_scale_at`); the truth file's law is the scaled one, the law simulated.
     """
     chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
     expected = surface(calibration_surface or surface_name)
     passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0,
-                        hip_trunk_spring_nm_rad)
+                        hip_trunk_spring_nm_rad, law_scale=law_scale)
     ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
     bell = None if bell_activation_min is None else BellActivation(bell_activation_min, ts)
-    law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts, hip_trunk_spring_nm_rad, bell)
+    law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts, hip_trunk_spring_nm_rad, bell,
+                    law_scale)
     config = HoppingConfig(
         freq_hz=freq_hz,
         n_hops=n_hops,
