@@ -27,7 +27,8 @@ the number of named steps whose held-out forward gap did not shrink.
 
 Usage: .venv/bin/python bench/discovery_hit_rates.py [--seeds N] [--null-seeds N] [--hops N] [--cases a,b,...]
        [--sizes rate_fraction=0.25,...] [--freqs 2.2]
-       [--strict-cases null,angle_dependent_stiffness,... --strict-seeds N --strict-null-seeds N] [--foreign DIR]
+       [--strict-cases null,angle_dependent_stiffness,... --strict-seeds N --strict-null-seeds N]
+       [--strict-null-seed-list 1,3,7] [--foreign DIR]
 Prints one line per run and the table (markdown) at the end.
 ``--scheduler local`` (the embedded cluster of ``hop-impedance batch``) or ``--scheduler tcp://HOST:8786``
 runs one Dask task per case and seed through :func:`hop_impedance.batch.runner.cluster_map`, discovery
@@ -116,6 +117,8 @@ def main() -> None:
     ap.add_argument("--strict-cases", default="", help="second-generator cases, e.g. " + ",".join(STRICT_CASES))
     ap.add_argument("--strict-seeds", type=int, default=5)
     ap.add_argument("--strict-null-seeds", type=int, default=10)
+    ap.add_argument("--strict-null-seed-list", default="",
+                    help="second-generator null seeds to run, e.g. 1,3,7 (instead of 0..--strict-null-seeds-1)")
     ap.add_argument("--foreign", default="", help="also score the truth-labelled recordings in this folder "
                                                   "(e.g. ../shared/foreign)")
     ap.add_argument("--freqs", default="", help="hop frequencies to cycle over (Hz), e.g. 2.2 (default: per case)")
@@ -129,9 +132,10 @@ def main() -> None:
     calls = [("simulator", name, seed, args.hops, sizes, freqs)
              for name in filter(None, args.cases.split(","))
              for seed in range(args.null_seeds if name == "null" else args.seeds)]
+    null_seeds = [int(s) for s in args.strict_null_seed_list.split(",") if s] or range(args.strict_null_seeds)
     calls += [("second generator", name, seed, args.hops, sizes, freqs)
               for name in filter(None, args.strict_cases.split(","))
-              for seed in range(args.strict_null_seeds if name == "null" else args.strict_seeds)]
+              for seed in (null_seeds if name == "null" else range(args.strict_seeds))]
     tallies = {("simulator", n): new_tally() for n in filter(None, args.cases.split(","))}
     tallies.update({("second generator", n): new_tally() for n in filter(None, args.strict_cases.split(","))})
     if args.scheduler:

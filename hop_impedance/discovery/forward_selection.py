@@ -20,7 +20,9 @@ For the current model and for every candidate (current model + one effect):
    ``d_i = log G_cur_i - log G_cand_i`` are significantly > 0 (one-sided
    one-sample t-test over the held-out stances, Bonferroni over the candidates
    of the step), the pooled held-out gap shrinks by at least :data:`MIN_SHRINK`,
-   and the physics admits it (:func:`admissible`). Choice: a t-test on log
+   and the physics admits it (:func:`admissible`); it is then named only if it also beats the current
+   model with its constant stiffness chosen through the simulation
+   (:mod:`hop_impedance.discovery.stiffness_gate`). Choice: a t-test on log
    ratios, not Wilcoxon: with 6 stances (the outside recordings) the exact
    Wilcoxon cannot go below 1/64 = 0.016 > 0.05/8, i.e. nothing could ever be named.
 
@@ -142,7 +144,7 @@ def measured_absorbed_work_j(s: MeasuredStance) -> float:
     return float(np.sum(trapezoid(np.maximum(s.moment_nm * s.omega_rad_s, 0.0), s.t_s, axis=0)))
 
 
-def _trial_for(spec: ModelSpec) -> MeasuredTrial:
+def trial_for(spec: ModelSpec) -> MeasuredTrial:
     """The measured trial with the model's marker latency removed and its body split (re-measured once per pair).
 
     Latencies are taken to the microsecond and the trial is re-measured at
@@ -202,10 +204,10 @@ def _gap_of(sim, s: MeasuredStance, offset_n: float, scales: np.ndarray) -> dict
 def _run_one(task: tuple) -> dict:
     """Identify on all stances but ``index`` (with ``effect`` added), simulate stance ``index``."""
     spec, effect, index = task
-    trial = _trial_for(spec)
+    trial = trial_for(spec)
     train = [s for s in trial.stances if s.index != index]
     fitted, _ = identify(spec, trial, train, effect)
-    measured = _trial_for(fitted)
+    measured = trial_for(fitted)
     train = [s for s in measured.stances if s.index != index]
     fitted, coefs = identify(fitted, measured, train)
     s = _stance_by_index(measured, index)
@@ -213,6 +215,16 @@ def _run_one(task: tuple) -> dict:
         return {"gap": np.inf, "rms": np.full(7, np.nan), "duration_error_s": np.nan, "net_work_j": np.nan,
                 "end_reason": "stance lost when re-measured"}
     return simulate_held_out(fitted, coefs, measured, s, _CONTEXT["scales"])
+
+
+def _in_sample_one(task: tuple) -> float:
+    """Simulate stance ``index`` with given coefficients (nothing identified): its gap ``G_i``."""
+    spec, coefs, index = task
+    trial = trial_for(spec)
+    s = _stance_by_index(trial, index)
+    if s is None:
+        return np.inf
+    return simulate_held_out(spec, coefs, trial, s, _CONTEXT["scales"])["gap"]
 
 
 class HeldOutEvaluator:
@@ -243,6 +255,12 @@ class HeldOutEvaluator:
     def __exit__(self, *exc):
         self.close()
 
+    def stance_gaps(self, spec: ModelSpec, coefs: np.ndarray) -> np.ndarray:
+        """Per-stance gap ``G_i`` of the fitted ``spec`` with ``coefs`` on every stance (in-sample, nothing identified)."""
+        tasks = [(spec, coefs, s.index) for s in self.trial.stances]
+        pool = self._pool
+        return np.array(list(pool.map(_in_sample_one, tasks)) if pool else [_in_sample_one(t) for t in tasks])
+
     def run(self, spec: ModelSpec, effects: list) -> list[HeldOutRuns]:
         """Held-out runs of ``spec`` with each of ``effects`` added (None = ``spec`` itself)."""
         import time
@@ -255,7 +273,7 @@ class HeldOutEvaluator:
         out = []
         for k, e in enumerate(effects):
             rs = results[k * len(idx):(k + 1) * len(idx)]
-            fitted, _ = identify(spec, _trial_for(spec), _trial_for(spec).stances, e)
+            fitted, _ = identify(spec, trial_for(spec), trial_for(spec).stances, e)
             out.append(HeldOutRuns(
                 effect=e, spec=fitted, gaps=np.array([r["gap"] for r in rs]), rms=np.array([r["rms"] for r in rs]),
                 duration_error_s=np.array([r["duration_error_s"] for r in rs]),
@@ -278,7 +296,7 @@ class ForwardScore:
     physics: dict
 
 
-def _one_sided_t(d: np.ndarray) -> float:
+def one_sided_t(d: np.ndarray) -> float:
     d = np.asarray(d, float)
     if not np.all(np.isfinite(d)):
         # a stance that failed to simulate: treat as a loss of that side (+/- large), keep the test finite
@@ -297,7 +315,7 @@ def physics_evidence(trial: MeasuredTrial, current: HeldOutRuns, cand: HeldOutRu
     spec = cand.spec
     return {
         "measured_net_joint_work_j": {"mean": float(w_meas.mean()), "se": se, "per_stance": w_meas.round(2).tolist(),
-                                      "p_positive": _one_sided_t(w_meas)},
+                                      "p_positive": one_sided_t(w_meas)},
         "simulated_net_joint_work_j": {"mean": float(np.nanmean(cand.net_work_j)),
                                        "per_stance": np.round(cand.net_work_j, 2).tolist()},
         "work_mismatch_j": {"candidate": float(np.nanmean(np.abs(cand.net_work_j - w_meas))),
@@ -350,7 +368,7 @@ def score(trial: MeasuredTrial, current: HeldOutRuns, cands: list[HeldOutRuns]) 
         phys["admissible"], phys["inadmissible_because"] = ok, why or None
         shrink = 1.0 - float(np.mean(c.gaps) / np.mean(current.gaps))
         out.append(ForwardScore(c.effect, c, d, float(np.mean(np.clip(np.nan_to_num(d, nan=0.0), -10, 10))),
-                                shrink, _one_sided_t(d), ok, phys))
+                                shrink, one_sided_t(d), ok, phys))
     return out
 
 
@@ -366,7 +384,7 @@ def ambiguous_with(best: ForwardScore, scores: list[ForwardScore]) -> list[dict]
     for sc in scores:
         if sc.effect == best.effect or sc.p_value >= ALPHA or sc.shrink < MIN_SHRINK:
             continue
-        p = _one_sided_t(best.log_ratios - sc.log_ratios)
+        p = one_sided_t(best.log_ratios - sc.log_ratios)
         if p > ALPHA:
             out.append({"effect": sc.effect, "held_out_shrink": sc.shrink, "p_value": sc.p_value,
                         "p_value_difference": p, "admissible": sc.admissible})

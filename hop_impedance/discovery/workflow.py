@@ -12,12 +12,14 @@ from typing import Any
 import numpy as np
 from scipy.integrate import trapezoid
 
+from hop_impedance.biomech.analysis import AnalysisOptions
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery.body_nuisance import choose_body
 from hop_impedance.discovery.identify import SIGNALS, core, identify, residuals
 from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
 from hop_impedance.discovery.model import ModelSpec, feature_names
+from hop_impedance.discovery.stiffness_gate import gate, shoot_stiffness
 from hop_impedance.recording import Recording
 
 SCHEMA = "hop_impedance.discover/1"
@@ -133,7 +135,8 @@ def parameters_of(spec: ModelSpec, coefs: np.ndarray, effect: str | None) -> dic
     return out
 
 
-def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None = None) -> dict:
+def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None = None,
+             options: AnalysisOptions | None = None) -> dict:
     """Name the effects the baseline model misses in a recording (see ``docs/discovery.md``).
 
     The simulation decides (:mod:`hop_impedance.discovery.forward_selection`): every candidate is
@@ -148,6 +151,8 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
         Most effects added.
     workers : int, optional
         Processes for the held-out simulations (default: up to 2 cores).
+    options : AnalysisOptions, optional
+        The analysis' options (e.g. segment ``overrides``: a body known better than the table).
 
     Returns
     -------
@@ -156,10 +161,10 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
         ``effects_found``, ``stances`` (used / rejected), ``selection``, ``timing``.
     """
     t_start = time.perf_counter()
-    trial, body = choose_body(rec, _measured_trial(rec), workers)
+    trial, body = choose_body(rec, _measured_trial(rec, options), workers)
     spec = ModelSpec(body_fraction=body.fraction)
     spec_fit, coefs = identify(spec, trial, trial.stances)
-    timing: dict = {"per_candidate_s": {}, "rounds": []}
+    timing: dict = {"per_candidate_s": {}, "rounds": [], "stiffness_s": []}
     with fs.HeldOutEvaluator(rec, trial, workers) as ev:
         current = ev.run(spec, [None])[0]
         timing["baseline_s"] = current.seconds
@@ -172,8 +177,8 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
             if not cands:
                 break
             scores = _scored_round(ev, spec, trial, current, cands, timing)
-            doc["selection"]["rounds"].append(_round_json(scores, len(cands), scales))
-            ok = [sc for sc in scores if fs.passes(sc, len(cands))]
+            ok, gates = _gated(ev, spec_fit, coefs, scores, len(cands), doc, timing)
+            doc["selection"]["rounds"].append(_round_json(scores, len(cands), scales, gates))
             if not ok:
                 break
             best = max(ok, key=lambda sc: sc.mean_log_ratio)
@@ -195,6 +200,33 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
     return doc
 
 
+def _gated(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, coefs: np.ndarray, scores: list[fs.ForwardScore],
+           n_candidates: int, doc: dict, timing: dict) -> tuple[list[fs.ForwardScore], dict]:
+    """The candidate to name (at most one) and the stiffness gate's figures by effect.
+
+    Only when some candidate passed the held-out test is the current model's k0 chosen through the
+    simulation, then that of each passing candidate in the order of its mean log gap ratio until one beats
+    the current model so (:mod:`hop_impedance.discovery.stiffness_gate`); the figures go to
+    ``selection.stiffness_through_simulation``, the searches' time to ``timing.stiffness_s``.
+    """
+    ok = sorted((sc for sc in scores if fs.passes(sc, n_candidates)), key=lambda sc: -sc.mean_log_ratio)
+    if not ok:
+        return [], {}
+    t0 = time.perf_counter()
+    shot = shoot_stiffness(ev, spec_fit, coefs)
+    gates: dict = {}
+    for sc in ok:
+        trial = fs.trial_for(sc.runs.spec)
+        cand_fit, cand_coefs = identify(sc.runs.spec, trial, trial.stances)
+        gates[sc.effect] = gate(shoot_stiffness(ev, cand_fit, cand_coefs, shot), shot, n_candidates)
+        if gates[sc.effect]["passes"]:
+            break
+    doc["selection"]["stiffness_through_simulation"].append(
+        {"round": len(doc["selection"]["rounds"]), "current": shot.as_json(), "candidates": gates})
+    timing["stiffness_s"].append(time.perf_counter() - t0)
+    return [sc for sc in ok if gates.get(sc.effect, {}).get("passes")], gates
+
+
 def _body_for(rec: Recording, trial: MeasuredTrial, spec: ModelSpec, workers: int | None,
               doc: dict) -> tuple[MeasuredTrial, ModelSpec]:
     """Trial and model with the body split chosen again for ``spec`` (after each named step).
@@ -209,9 +241,9 @@ def _body_for(rec: Recording, trial: MeasuredTrial, spec: ModelSpec, workers: in
     return trial, replace(spec, body_fraction=body.fraction)
 
 
-def _measured_trial(rec: Recording) -> MeasuredTrial:
+def _measured_trial(rec: Recording, options: AnalysisOptions | None = None) -> MeasuredTrial:
     """The recording's stances as discovery measures them; ValueError when too few for held-out testing."""
-    trial = measure_trial(rec)
+    trial = measure_trial(rec, options=options)
     if len(trial.stances) < fs.MIN_STANCES:
         raise ValueError(f"discovery needs at least {fs.MIN_STANCES} usable stances for held-out testing, "
                          f"got {len(trial.stances)}")
@@ -237,7 +269,7 @@ def _baseline_document(spec_fit: ModelSpec, coefs: np.ndarray, trial: MeasuredTr
         "selection": {"method": "leave-one-stance-out forward simulation; one-sided t-test of per-stance "
                                 "log gap ratios, Bonferroni over the step's candidates",
                       "alpha": fs.ALPHA, "min_shrink": fs.MIN_SHRINK, "gap_scales": scales.tolist(),
-                      "rounds": []},
+                      "rounds": [], "stiffness_through_simulation": []},
     }
 
 
@@ -256,11 +288,15 @@ def _scored_round(ev: fs.HeldOutEvaluator, spec: ModelSpec, trial: MeasuredTrial
     return fs.score(trial, current, runs)
 
 
-def _round_json(scores: list[fs.ForwardScore], n_candidates: int, scales: np.ndarray) -> dict:
-    """``selection.rounds[i]``: every candidate's held-out figures and whether it passed."""
+def _round_json(scores: list[fs.ForwardScore], n_candidates: int, scales: np.ndarray, gates: dict) -> dict:
+    """``selection.rounds[i]``: every candidate's held-out figures and whether it passed.
+
+    ``passes``: the held-out test and, for those that passed it, the stiffness gate (``gates``, by effect).
+    """
     return {sc.effect: {
         "held_out_shrink": sc.shrink, "mean_log_gap_ratio": sc.mean_log_ratio, "p_value": sc.p_value,
-        "passes": fs.passes(sc, n_candidates), "per_stance_log_gap_ratio": np.round(sc.log_ratios, 4).tolist(),
+        "passes": fs.passes(sc, n_candidates) and gates.get(sc.effect, {}).get("passes", True),
+        "per_stance_log_gap_ratio": np.round(sc.log_ratios, 4).tolist(),
         "gap_after": sc.runs.figures(scales)["total"], "physics": sc.physics} for sc in scores}
 
 
