@@ -9,6 +9,7 @@ Usage::
     .venv/bin/python bench/simulator_realism.py --seed-like       # issue 17 candidate (scenarios.seed_like_options)
     .venv/bin/python bench/simulator_realism.py --seed-like --write   # its tables into docs/simulator.md
     .venv/bin/python bench/simulator_realism.py --seed-like --bell 1 --fits --freqs 1.53,1.87,2.2  # without the bell, with fits
+    .venv/bin/python bench/simulator_realism.py --seed-like --fit-law --fits  # the law whose fit returns Table 2
 
 Every simulated figure is measured by the analysis (``hop-impedance analyze``:
 ``analyze_recording`` + ``io.analyze_json.analysis_to_json``, stance detection and 2D inverse
@@ -57,6 +58,7 @@ from hop_impedance.recording import MARKER_NAMES
 from hop_impedance.simulation.scenarios import (
     DEFAULT_TOUCHDOWN_RHO,
     PUSH_OFF_TIMING,
+    SEED_LIKE_LAW_SCALE,
     TRUNK_BALANCE,
     Effects,
     seed_like_options,
@@ -113,12 +115,13 @@ CHAIN_POINTS = [MARKER_NAMES.index(n) for n in ("toe", "ankle", "knee", "hip", "
 
 def measure(freq_hz: float, hops: int = 6, seed: int = 1, trunk: bool = False, flight: str = "prescribed",
             posture=DEFAULT_TOUCHDOWN_RHO, contact_ahead_m: float = 0.0, push_timing=PUSH_OFF_TIMING,
-            effects: Effects = Effects(), bell_activation_min: float | None = None, fits: bool = False) -> dict:
+            effects: Effects = Effects(), bell_activation_min: float | None = None, fits: bool = False,
+            law_scale: dict | None = None) -> dict:
     """Mean per-hop figures that the analysis measures on a noise-free simulated recording (hard surface)."""
     rec, truth = simulate_recording(freq_hz, "hard", hops, seed=seed, sensors=noise_free(SensorConfig()), effects=effects,
                                     touchdown_rho_rad=posture, trunk_balance=TRUNK_BALANCE if trunk else None,
                                     flight=flight, contact_ahead_m=contact_ahead_m, push_timing=push_timing,
-                                    bell_activation_min=bell_activation_min)
+                                    bell_activation_min=bell_activation_min, law_scale=law_scale)
     analysis = analyze_recording(rec)
     doc = analysis_to_json(analysis)
     if fits:  # the per-stance Eq. 3 fit that `hop-impedance analyze` adds, with k0, k1, b0 for every joint
@@ -363,6 +366,9 @@ def main() -> None:
                         help="the bell activation from A_MIN at touchdown over the passive stance "
                              "(hopping_config bell_activation_min; --seed-like: scenarios.SEED_LIKE_BELL_MIN, 0.7; "
                              "1 = no bell)")
+    parser.add_argument("--fit-law", action="store_true",
+                        help="with --seed-like: simulate the law whose per-stance fit returns Table 2 "
+                             "(scenarios.SEED_LIKE_LAW_SCALE x Table 2) instead of Table 2 itself")
     parser.add_argument("--activation", action="store_true",
                         help="with the time-based activation of the elastic moment (scenarios.ACTIVATION, Effects)")
     parser.add_argument("--fits", action="store_true",
@@ -377,10 +383,12 @@ def main() -> None:
         a, k, h = (float(v) for v in args.posture.split(","))
         posture = (a, np.pi + k, np.pi + h)
     bell_override = None
+    law_scale = None
     if args.seed_like:
         opts = seed_like_options()
         args.trunk, contact, posture, push_timing = True, opts["contact_ahead_m"], opts["touchdown_rho_rad"], opts["push_timing"]
         bell_override, args.bell = args.bell, opts["bell_activation_min"] if args.bell is None else args.bell
+        law_scale = SEED_LIKE_LAW_SCALE if args.fit_law else None
     if args.bell == 1.0:  # a(t) = 1: no bell (and room for --activation)
         args.bell = None
         args.contact = "toe_tip"
@@ -390,7 +398,7 @@ def main() -> None:
         a, k, h = (float(v) for v in args.posture.split(","))
         posture = (a, np.pi + k, np.pi + h)
     if args.write and (args.freqs or args.push_timing or args.activation or (args.posture and args.seed_like)
-                       or (args.seed_like and bell_override is not None)):
+                       or (args.seed_like and bell_override is not None) or args.fit_law):
         parser.error("--write writes the chosen configuration only: not with --freqs, --push-timing, --activation, "
                      "or --posture / --bell with --seed-like")
     wanted = None if args.freqs is None else [float(v) for v in args.freqs.split(",")]
@@ -403,7 +411,7 @@ def main() -> None:
         try:
             results[f] = measure(f, trunk=args.trunk, flight=args.flight, posture=posture, contact_ahead_m=contact,
                                  push_timing=push_timing, effects=Effects(time_activation=args.activation),
-                                 bell_activation_min=args.bell, fits=args.fits)
+                                 bell_activation_min=args.bell, fits=args.fits, law_scale=law_scale)
         except ValueError as exc:  # e.g. no calibrated hop, or a trial that stops before a second stance
             results[f] = failed(f, str(exc))
     hopexo = hopexo_means()
@@ -415,6 +423,7 @@ def main() -> None:
              f"push-off from {push_timing[0]:.0%} for {push_timing[1]:.0%} of the passive stance, "
              f"{'time-based activation, ' if args.activation else ''}"
              f"{'' if args.bell is None else f'bell activation from {args.bell:g} at touchdown, '}"
+             f"{'' if law_scale is None else 'law: Table 2 x scenarios.SEED_LIKE_LAW_SCALE (its fit returns Table 2), '}"
              f"{min(r['n_stances'] for r in results.values())}-{max(r['n_stances'] for r in results.values())} "
              "analysed stances per frequency")
     print(text)

@@ -61,8 +61,7 @@ def simulate_recording(
     trunk_balance, flight, contact_ahead_m, push_timing, bell_activation_min :
         Trunk-balance moment at the hip, flight model, ground contact ahead of the toe marker (m) and
         push-off onset/duration as fractions of the passive stance (:func:`hopping_config`; defaults:
-        none, prescribed, 0 = at the marker, :data:`PUSH_OFF_TIMING`); ``bell_activation_min`` and
-        ``law_scale`` likewise.
+        none, prescribed, 0 = at the marker, :data:`PUSH_OFF_TIMING`); ``bell_activation_min``, ``law_scale`` too.
         :func:`seed_like_options` bundles issue 17's candidate.
 
     Returns
@@ -75,8 +74,7 @@ def simulate_recording(
         freq_hz, surface_name, n_hops, effects, subject=subject, touchdown_rho_rad=touchdown_rho_rad,
         unexpected_surface=unexpected_surface, unexpected_hops=unexpected_hops, calibration_surface=tuned_for,
         variability=variability, trunk_balance=trunk_balance, flight=flight, contact_ahead_m=contact_ahead_m,
-        push_timing=push_timing, bell_activation_min=bell_activation_min,
-        law_scale=law_scale)
+        push_timing=push_timing, bell_activation_min=bell_activation_min, law_scale=law_scale)
     trial = simulate_hopping(chain, config, seed=seed)
     recording, sensor_truth = sample_recording(trial, sensors, subject, np.random.default_rng([seed, 1]))
     gen = {"seed": seed, "freq_hz": freq_hz, "surface": surface_name, "n_hops": n_hops,

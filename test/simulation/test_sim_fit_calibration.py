@@ -57,3 +57,25 @@ def test_next_scale_solves_a_coupled_affine_fit_map_where_the_plain_ratio_oscill
         devs.append(worst_deviation(fitted, target))
         plain = plain * np.where(fitted > 0, target / fitted, 1.0)
     assert min(devs[-3:]) > 0.2
+
+
+def test_seed_like_trial_fits_back_to_table2_at_ankle_and_knee_and_table2_itself_does_not():
+    """Issue 17: the seed-like 2.2 Hz trial (seed_like_options with the law SEED_LIKE_LAW_SCALE x Table 2, the
+    truth file stating it) analysed from markers and plate and fitted per stance (k0, k1, b0; medians after the first
+    stance) returns Table 2's ankle and knee k0, k1 within 15 %; with Table 2 itself as the law under the bell the
+    fit misses it (ankle k0 -48 %, k1 +63 %, bench/simulator_realism.py --seed-like --fits before the scale)."""
+    from hop_impedance.simulation.fit_calibration import fitted_k0_k1
+    from hop_impedance.simulation.scenarios import SEED_LIKE_LAW_SCALE, seed_like_options
+    from hop_impedance.simulation.sensors import SensorConfig, noise_free
+    from hop_impedance.simulation.simulate import simulate_recording
+
+    target = table2_k(2.2)
+    options = {**seed_like_options(), "law_scale": SEED_LIKE_LAW_SCALE}
+    rec, truth = simulate_recording(2.2, "hard", 6, seed=1, sensors=noise_free(SensorConfig()), **options)
+    eq3 = truth["law"]["parts"][0]
+    assert eq3["activation"]["a_min"] == 0.7
+    np.testing.assert_allclose(np.array([eq3["k0"], eq3["k1"]]), target * np.array(SEED_LIKE_LAW_SCALE[2.2]), rtol=1e-9)
+    assert worst_deviation(fitted_k0_k1(rec), target) < 0.15
+    plain = {k: v for k, v in options.items() if k != "law_scale"}
+    rec, _ = simulate_recording(2.2, "hard", 6, seed=1, sensors=noise_free(SensorConfig()), **plain)
+    assert worst_deviation(fitted_k0_k1(rec), target) > 0.3
