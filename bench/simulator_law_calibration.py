@@ -51,7 +51,7 @@ def main() -> None:
             print(f"  step {i}: factors k0 ankle {scale[0, 0]:.3f} knee {scale[0, 1]:.3f}, k1 ankle {scale[1, 0]:.3f} "
                   f"knee {scale[1, 1]:.3f} -> fit vs Table 2: k0 {dev[0, 0]:+.1f} / {dev[0, 1]:+.1f} / {dev[0, 2]:+.1f} %, "
                   f"k1 {dev[1, 0]:+.1f} / {dev[1, 1]:+.1f} / {dev[1, 2]:+.1f} % (ankle / knee / hip)")
-        table[f] = np.round(cal.scale, 3)
+        table[f] = np.round(cal.scale, 6)
         converged = np.all(np.abs(cal.deviation()[:, :2]) <= args.tolerance)
         print(f"  {'within' if converged else 'NOT within'} {args.tolerance:.0%} at the last step")
     print("SEED_LIKE_LAW_SCALE = {")

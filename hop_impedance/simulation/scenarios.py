@@ -98,12 +98,12 @@ SEED_LIKE_BELL_MIN = 0.7
 #: what its fit returned, and with the bell the fit reads a(t) K as more angle dependence (docs/simulator.md).
 #: Found by one rule at every frequency, simulation/fit_calibration.calibrate_law_scale (printed by
 #: bench/simulator_law_calibration.py); the hip stays Table 2. Between frequencies interpolated (law_scale_at).
-#: 1.87 and 2.2 Hz converged (worst ankle/knee deviation 7.9 / 3.4 %); 1.53 Hz did not (its best measured step,
+#: 1.87 and 2.2 Hz converged (worst ankle/knee deviation 2.0 / 3.4 %); 1.53 Hz did not (its best measured step,
 #: 50 %: nearby laws fit tens of percent apart or do not hop). Not in :func:`seed_like_options`: with it the
 #: realism table has 10 binding cells out instead of 3 (bench/simulator_realism.py --seed-like --fit-law).
 SEED_LIKE_LAW_SCALE: dict[float, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
     1.53: ((1.428711, 1.19152, 1.0), (0.910115, 0.834152, 1.0)),
-    1.87: ((1.661884, 1.106058, 1.0), (0.190882, 0.814462, 1.0)),
+    1.87: ((1.612, 1.158, 1.0), (0.219, 0.702, 1.0)),
     2.2: ((1.621351, 1.228278, 1.0), (0.181142, 0.509091, 1.0)),
 }
 
