@@ -35,8 +35,9 @@ def main() -> None:
     tm = doc["timing"]
     print(f"recording: {args.recording or '10-hop simulated, angle-dependent stiffness'}; "
           f"stances used {len(doc['stances']['used'])}; effects found: {doc['effects_found']}")
-    print(f"discover total: {total:.1f} s (baseline held-out runs {tm['baseline_s']:.1f} s; rounds "
-          + ", ".join(f"{r:.1f}" for r in tm["rounds"]) + " s)")
+    print(f"discover total: {total:.1f} s (body split search {tm['body_s']:.1f} s; baseline held-out runs "
+          f"{tm['baseline_s']:.1f} s; rounds " + ", ".join(f"{r:.1f}" for r in tm["rounds"]) + " s; stiffness gate "
+          + (", ".join(f"{r:.1f}" for r in tm["stiffness_s"]) or "not needed") + " s)")
     print("mean time per candidate (s): " + ", ".join(f"{k} {v:.1f}" for k, v in tm["per_candidate_s"].items()))
 
 

@@ -201,7 +201,7 @@ def test_latency_remeasurement_does_not_depend_on_which_latency_came_first():
         seen = []
         for latency in (0.0120004, 0.0119996):  # one microsecond bucket, met in either order
             fs._CONTEXT.pop("latency_cache", None)
-            seen.append(fs._trial_for(ModelSpec(effects=("stream_latency",), latency_s=latency)))
+            seen.append(fs.trial_for(ModelSpec(effects=("stream_latency",), latency_s=latency)))
     for got in seen:
         assert len(got.stances) == len(reference.stances) > 5
         for a, b in zip(got.stances, reference.stances):
