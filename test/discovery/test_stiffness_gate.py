@@ -2,7 +2,7 @@
 current model, with its constant stiffness chosen through the simulation, is not as good forward.
 
 Checked against a known truth: a strict null of the second generator (no effect hidden) that the
-held-out test alone named falsely (seed 3: angle-dependent stiffness, 8/60 false before the gate), and the
+held-out test alone named falsely (seed 43: angle-dependent stiffness, 8/60 false before the gate), and the
 gate's arithmetic against scipy's t-test.
 """
 
@@ -39,10 +39,10 @@ def test_gate_is_the_one_sided_t_test_of_log_ratios_between_the_shot_models():
 
 @pytest.mark.slow
 def test_a_strict_null_named_by_the_held_out_test_is_stopped_by_the_shot_stiffness():
-    """Strict null seed 3, 8 hops (named falsely before the gate): the regression's k0 leaves the baseline's
-    in-sample forward gap at 0.041 and the angle-dependent candidate passes the held-out test; with k0 shot
+    """Strict null seed 43, 8 hops (named falsely before the gate): the regression's k0 leaves the baseline's
+    in-sample forward gap at 0.022 and the angle-dependent candidate passes the held-out test; with k0 shot
     for both the current model's gap falls by more than half and the candidate does not beat it."""
-    rec, _ = strict_recording(StrictConfig(seed=3, hops=8))
+    rec, _ = strict_recording(StrictConfig(seed=43, hops=8))
     trial, body = choose_body(rec, measure_trial(rec))
     spec = ModelSpec(body_fraction=body.fraction)
     spec_fit, coefs = identify(spec, trial, trial.stances)
