@@ -139,9 +139,8 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
              options: AnalysisOptions | None = None) -> dict:
     """Name the effects the baseline model misses in a recording (see ``docs/discovery.md``).
 
-    The simulation decides (:mod:`hop_impedance.discovery.forward_selection`): every candidate is
-    identified on all stances but one and the held-out stance is simulated forward from its measured
-    touchdown state; an effect is named only if it significantly shrinks the held-out forward gap.
+    The simulation decides (:mod:`hop_impedance.discovery.forward_selection`): an effect is named only if it
+    significantly shrinks the held-out forward gap (and passes :mod:`hop_impedance.discovery.stiffness_gate`).
 
     Parameters
     ----------
@@ -157,8 +156,7 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
     Returns
     -------
     dict
-        ``schema``, ``baseline_gap``, ``steps``, ``final_gap``,
-        ``effects_found``, ``stances`` (used / rejected), ``selection``, ``timing``.
+        ``schema``, ``baseline_gap``, ``steps``, ``final_gap``, ``effects_found``, ``stances``, ``selection``, ``timing``.
     """
     t_start = time.perf_counter()
     trial, body = choose_body(rec, _measured_trial(rec, options), workers)
