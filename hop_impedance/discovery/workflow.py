@@ -153,10 +153,8 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
     options : AnalysisOptions, optional
         The analysis' options (e.g. segment ``overrides``: a body known better than the table).
 
-    Returns
-    -------
-    dict
-        ``schema``, ``baseline_gap``, ``steps``, ``final_gap``, ``effects_found``, ``stances``, ``selection``, ``timing``.
+    Returns the document (``schema``, ``baseline_gap``, ``steps``, ``final_gap``, ``effects_found``, ``stances``,
+    ``selection``, ``timing``).
     """
     t_start = time.perf_counter()
     trial, body = choose_body(rec, _measured_trial(rec, options), workers)
