@@ -3,14 +3,14 @@
 Why
 ---
 Every model is identified by regression on the inverse-dynamics moments. Where a joint barely moves the
-regression cannot pin its stiffness: on the second generator's strict nulls the hip moves 0.09-0.15 rad
-in stance and its ID moment is off by 3-4 N m RMS (with the generator's own segment parameters given to
-the analysis), so the per-stance slope scatters by +-50 N m/rad around the true 138 N m/rad and the
-pooled one came out at 95 (null seed 3). That error is not an effect, but the constant-stiffness
-baseline then fails forward, and a flexible candidate (an angle- or rate-dependent stiffness, an
-activation, damping), identified by the same regression, shrinks the held-out gap significantly through
-its extra coefficients: 8 of 60 strict nulls were named falsely with the body split absorbed, and with
-the generator's own body 5 of the same 8 still were (``/tmp`` scratch runs, figures in docs/discovery.md).
+regression cannot pin its stiffness: on the second generator's strict null seed 3 the hip moves 0.04-0.17
+rad in stance and, with the generator's own segment parameters given to the analysis, the baseline's hip
+k0 comes out at 94 N m/rad against the true 138, its in-sample forward gap at 0.0345 against the true law's
+0.0194 (``bench/discovery_strict_floor.py --seeds 3``). That error is not an effect, but a flexible
+candidate (an angle- or rate-dependent stiffness, an activation, damping), identified by the same
+regression, shrank the held-out gap significantly through its extra coefficients: 8 of 60 strict nulls
+were named falsely with the body split absorbed, and with the generator's own body 4 of those 8 still were
+(``bench/discovery_strict_floor.py --discover`` repeats that; measured before the gate).
 
 Rule
 ----
