@@ -472,9 +472,11 @@ def extend_past_window(span: SpanData, stances: list[Stance], k: int, options: A
         return out
     tm, xz = span.marker_t_s, span.markers_xz
     assert xz is not None  # set together with marker_t_s
-    tm_ext, xz_ext = _extrapolated_markers(tm, xz, t_ext[-1])
-    if MARKER_TEMPLATE and k > 0:
-        xz_ext = _templated_markers(tm, xz, tm_ext, xz_ext, stances[k - 1], stances[k])
+    dtm = 1.0 / sampling_rate_hz(tm)  # marker frames after the last one, at the marker rate, to one frame past the end
+    tm_ext = tm[-1] + dtm * np.arange(1, int(np.ceil((t_ext[-1] - tm[-1]) / dtm)) + 2)
+    xz_ext = np.full((tm_ext.size,) + xz.shape[1:], np.nan)
+    templated = _templated_markers(tm, xz, tm_ext, xz_ext, stances[k - 1], stances[k]) if MARKER_TEMPLATE and k > 0 else []
+    _extrapolated_markers(tm, xz, tm_ext, xz_ext, [m for m in range(xz.shape[1]) if m not in templated])
     out.marker_t_s, out.markers_xz = np.concatenate([tm, tm_ext]), np.concatenate([xz, xz_ext])
     return out
 
@@ -493,20 +495,17 @@ def _offset_of_flight_before(span: SpanData, stances: list[Stance], k: int, opti
     return offsets[-1] if len(offsets) else np.zeros(w.shape[1])
 
 
-def _extrapolated_markers(tm: np.ndarray, xz: np.ndarray, end_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Marker frames after the last one, at the marker rate, until one frame past ``end_s`` (s).
+def _extrapolated_markers(tm: np.ndarray, xz: np.ndarray, tm_ext: np.ndarray, xz_ext: np.ndarray,
+                          markers: list[int]) -> None:
+    """Write ``markers``' frames at ``tm_ext`` (s, after the last frame) into ``xz_ext`` (m, shaped like ``xz``).
 
     Each marker goes on by the least-squares polynomial of degree
     ``MARKER_FIT_DEGREE`` in time through its last ``MARKER_FIT_FRAMES``
     frames (fewer, and a lower degree, when its last visible run is
-    shorter); a marker whose last frame is missing stays NaN (its gap runs
-    to the edge). Returns the new times (s) and markers (m), shaped like
-    ``tm`` and ``xz``.
+    shorter); a marker whose last frame is missing is left as it is in
+    ``xz_ext`` (NaN: its gap runs to the edge).
     """
-    dtm = 1.0 / sampling_rate_hz(tm)
-    tm_ext = tm[-1] + dtm * np.arange(1, int(np.ceil((end_s - tm[-1]) / dtm)) + 2)
-    xz_ext = np.full((tm_ext.size,) + xz.shape[1:], np.nan)
-    for m in range(xz.shape[1]):
+    for m in markers:
         finite = np.all(np.isfinite(xz[:, m]), axis=1)
         if not finite[-1]:
             continue
@@ -515,7 +514,6 @@ def _extrapolated_markers(tm: np.ndarray, xz: np.ndarray, end_s: float) -> tuple
         deg = min(MARKER_FIT_DEGREE, last.size - 1)
         coef = np.polynomial.polynomial.polyfit(tm[last] - tm[-1], xz[last, m], deg)
         xz_ext[:, m] = np.polynomial.polynomial.polyval(tm_ext - tm[-1], coef).T
-    return tm_ext, xz_ext
 
 
 #: Continue the markers past a short window's end by the previous hop's motion after its take-off
@@ -533,8 +531,12 @@ TEMPLATE_LEAD_S = 0.03
 
 
 def _templated_markers(tm: np.ndarray, xz: np.ndarray, tm_ext: np.ndarray, xz_ext: np.ndarray,
-                       prev: Stance, cur: Stance) -> np.ndarray:
-    """Markers past the window end continued by the previous hop's motion after its take-off (m).
+                       prev: Stance, cur: Stance) -> list[int]:
+    """Markers past the window end continued by the previous hop's motion after its take-off.
+
+    Writes the frames at ``tm_ext`` (s) into ``xz_ext`` (m) for the markers
+    it can continue and returns their indices; the others are left to the
+    straight line (:func:`_extrapolated_markers`).
 
     Hopping repeats itself: what each marker did after the previous
     take-off is the best guess of what it does after this one. The
@@ -546,8 +548,8 @@ def _templated_markers(tm: np.ndarray, xz: np.ndarray, tm_ext: np.ndarray, xz_ex
     ``MARKER_TEMPLATE_FRAMES`` frames by a fitted offset and drift (with 2
     frames: the last frame's position and the last two frames' velocity).
     This carries the take-off's segment accelerations, which the straight
-    line (``xz_ext``, returned for markers without a finite template or
-    anchor) sets to zero. Uses only frames at or before the window end.
+    line (for markers without a finite template or anchor) sets to zero.
+    Uses only frames at or before the window end.
 
     Measured (bench/low_latency_windows.py, 36 recovery cells against batch, PAD 5 ms):
     see :func:`extend_past_window`.
@@ -559,21 +561,20 @@ def _templated_markers(tm: np.ndarray, xz: np.ndarray, tm_ext: np.ndarray, xz_ex
     n_fit = min(MARKER_TEMPLATE_FRAMES, tm.size)
     r_fit = tm[-n_fit:] - cur.takeoff_s
     if length < TEMPLATE_MIN_S or sel.sum() < 6 or r_fit[0] < tm[sel][0] - prev.takeoff_s:
-        return np.asarray(xz_ext)
+        return []
     r = np.minimum(tm_ext - cur.takeoff_s, length)
     beyond = np.maximum(tm_ext - cur.takeoff_s - length, 0.0)
     anchor = np.column_stack([np.ones(n_fit), tm[-n_fit:] - tm[-1]])[:, : min(n_fit, 2)]
     ahead = np.column_stack([np.ones(tm_ext.size), tm_ext - tm[-1]])[:, : anchor.shape[1]]
-    out: np.ndarray = xz_ext.copy()
     usable = [m for m in range(xz.shape[1]) if np.isfinite(xz[sel, m]).all() and np.isfinite(xz[-n_fit:, m]).all()]
     if not usable:
-        return out
+        return []
     spline = CubicSpline(tm[sel] - prev.takeoff_s, xz[sel][:, usable], axis=0)
     residual = xz[-n_fit:][:, usable] - spline(r_fit)  # (n_fit, markers, 2)
     coef, *_ = np.linalg.lstsq(anchor, residual.reshape(n_fit, -1), rcond=None)
-    out[:, usable] = (spline(r) + beyond[:, None, None] * spline(length, 1)[None]
-                      + (ahead @ coef).reshape((tm_ext.size,) + residual.shape[1:]))
-    return out
+    xz_ext[:, usable] = (spline(r) + beyond[:, None, None] * spline(length, 1)[None]
+                         + (ahead @ coef).reshape((tm_ext.size,) + residual.shape[1:]))
+    return usable
 
 
 def analyze_short_window(
