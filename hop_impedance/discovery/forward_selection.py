@@ -356,25 +356,35 @@ def admissible(effect: str, physics: dict) -> tuple[bool, str]:
     return True, ""
 
 
+def compare_gaps(current: np.ndarray, cand: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """Per-stance log gap ratios (current over candidate), the pooled shrink and their one-sided p-value."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d = np.log(current) - np.log(cand)
+    return d, 1.0 - float(np.mean(cand) / np.mean(current)), one_sided_t(d)
+
+
+def significant(p_value: float, shrink: float, n_candidates: int) -> bool:
+    """Significant (Bonferroni over the round's candidates) and relevant (pooled shrink >= MIN_SHRINK)."""
+    return p_value < ALPHA / max(n_candidates, 1) and shrink >= MIN_SHRINK
+
+
 def score(trial: MeasuredTrial, current: HeldOutRuns, cands: list[HeldOutRuns]) -> list[ForwardScore]:
     """Compare every candidate's held-out forward runs with the current model's (module docstring)."""
     out = []
     for c in cands:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            d = np.log(current.gaps) - np.log(c.gaps)
+        d, shrink, p = compare_gaps(current.gaps, c.gaps)
         assert c.effect is not None  # a candidate adds an effect (remaining(spec)); None is the current model
         phys = physics_evidence(trial, current, c)
         ok, why = admissible(c.effect, phys)
         phys["admissible"], phys["inadmissible_because"] = ok, why or None
-        shrink = 1.0 - float(np.mean(c.gaps) / np.mean(current.gaps))
         out.append(ForwardScore(c.effect, c, d, float(np.mean(np.clip(np.nan_to_num(d, nan=0.0), -10, 10))),
-                                shrink, one_sided_t(d), ok, phys))
+                                shrink, p, ok, phys))
     return out
 
 
 def passes(sc: ForwardScore, n_candidates: int) -> bool:
     """Significant (Bonferroni), relevant (pooled shrink >= MIN_SHRINK) and physically admissible."""
-    return sc.p_value < ALPHA / max(n_candidates, 1) and sc.shrink >= MIN_SHRINK and sc.admissible
+    return significant(sc.p_value, sc.shrink, n_candidates) and sc.admissible
 
 
 def ambiguous_with(best: ForwardScore, scores: list[ForwardScore]) -> list[dict]:

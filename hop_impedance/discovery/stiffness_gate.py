@@ -116,9 +116,6 @@ def shoot_stiffness(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, coefs: np.ndar
 
 def gate(cand: ShotStiffness, current: ShotStiffness, n_candidates: int) -> dict:
     """Does the candidate beat the current model, both with k0 chosen through the simulation (module docstring)?"""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        d = np.log(current.gaps) - np.log(cand.gaps)
-    p = fs.one_sided_t(d)
-    shrink = 1.0 - float(np.mean(cand.gaps) / np.mean(current.gaps))
-    return {"passes": bool(p < fs.ALPHA / max(n_candidates, 1) and shrink >= fs.MIN_SHRINK), "p_value": p,
+    d, shrink, p = fs.compare_gaps(current.gaps, cand.gaps)
+    return {"passes": fs.significant(p, shrink, n_candidates), "p_value": p,
             "shrink_against_shot": shrink, "per_stance_log_gap_ratio": np.round(d, 4).tolist(), **cand.as_json()}
