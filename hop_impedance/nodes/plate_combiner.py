@@ -187,7 +187,10 @@ class PlateCombinerNode(Node):
         return 0, "ok"
 
     def _diag_values(self) -> dict:
-        out: dict[str, object] = {"published": self.published, "instants_dropped": self.stage.dropped}
+        # readers: subscriptions matched to the combined output at this node's own participant (a downstream
+        # node that is not yet matched misses the start of the stream; tests wait for it before replaying)
+        out: dict[str, object] = {"published": self.published, "instants_dropped": self.stage.dropped,
+                                  "readers": self.pub.get_subscription_count()}
         for lay, t, buf, missing, skew in zip(self.layouts, self.trackers, self.buffers, self.stage.missing, self.stage.skew_ns):
             out[f"{lay.name}_received"] = t.received
             out[f"{lay.name}_rate_hz"] = t.rate_hz

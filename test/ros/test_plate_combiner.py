@@ -69,6 +69,15 @@ def _wait_until(executor, condition, timeout_s: float) -> None:
         executor.spin_once(timeout_sec=0.05)
 
 
+def _readers(diags: list) -> int:
+    """Readers matched to the combined output, from the plate_combiner's newest diagnostics."""
+    for d in reversed(diags):
+        for st in d.status:
+            if st.name == "/plate_combiner":
+                return int(next((kv.value for kv in st.values if kv.key == "readers"), "0"))
+    return 0
+
+
 def _run(mcap: Path, want: int, log_dir: Path, timeout_s: float = 60.0, settle_s: float = 1.0, detector: bool = False):
     """Start plate_combiner (stance_detector after it, if asked) and replay as processes; collect the
     combined wrench, the plate_combiner's /diagnostics and the stance events."""
@@ -98,8 +107,8 @@ def _run(mcap: Path, want: int, log_dir: Path, timeout_s: float = 60.0, settle_s
             log.close()
             if name == "plate_combiner":  # the replay waits for its readers; the combiner's reader is us
                 _wait_until(executor, lambda: node.count_publishers(OUTPUT) > 0 and diags, 20.0)
-            elif name == "stance_detector":
-                _wait_until(executor, lambda: node.count_subscribers(OUTPUT) > 1 and node.count_publishers(EVENTS) > 0, 20.0)
+            elif name == "stance_detector":  # matched at the combiner itself (its diagnostics), not only seen by us
+                _wait_until(executor, lambda: node.count_publishers(EVENTS) > 0 and _readers(diags) > 1, 20.0)
         replay = children[-1]
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline and (len(wrenches) < want or replay.poll() is None):
