@@ -26,7 +26,9 @@ Runs the node graph in one process (EventsExecutor) on a bundled recording:
 the largest relative difference |live - offline| / |offline| of any coefficient per joint: the same
 figures in every run show that the live result does not depend on message timing.
 
-Usage: .venv/bin/python bench/bench_pipeline.py [REC.mcap] [--latency-only | --live-vs-offline N]
+Usage: .venv/bin/python bench/bench_pipeline.py [REC.mcap] [--latency-only [--modes "pad 5,low-latency"] | --live-vs-offline N]
+
+``--modes`` runs only the latency rows whose name contains one of the comma-separated strings.
 """
 
 import os
@@ -164,7 +166,8 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> str:
             f"{d('/impedance_estimator', 'fit_p99_ms')} ms (CPU {d('/impedance_estimator', 'fit_cpu_p50_ms')}/"
             f"{d('/impedance_estimator', 'fit_cpu_p99_ms')} ms); pipeline's own take-off to profile p50/p99 "
             f"{d('/impedance_estimator', 'takeoff_to_profile_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_profile_p99_ms')} ms; "
-            f"load average {load:.1f} on {os.cpu_count()} cores")
+            f"load average {load:.1f} on {os.cpu_count()} cores; per stance (ms) "
+            + " ".join(f"{x:.1f}" for x in lat))
 
 
 def live_vs_offline(rec: str, runs: int) -> None:
@@ -198,7 +201,8 @@ def live_vs_offline(rec: str, runs: int) -> None:
 
 
 def main() -> None:
-    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    only = sys.argv[sys.argv.index("--modes") + 1].split(",") if "--modes" in sys.argv else None
+    args = [a for a in sys.argv[1:] if not a.startswith("--") and (only is None or a != ",".join(only))]
     if "--live-vs-offline" in sys.argv:
         runs = int(sys.argv[sys.argv.index("--live-vs-offline") + 1])
         args = [a for a in args if a != str(runs)]
@@ -212,6 +216,8 @@ def main() -> None:
                      ("one process, pad 5 ms", early),
                      ("--processes, batch", {"processes": True}), ("--processes, low-latency", {"processes": True, "low_latency": True}),
                      ("--processes, pad 5 ms", {**early, "processes": True})):
+        if only is not None and not any(o in name for o in only):
+            continue
         print(f"{name:<26}: {controller_latency(rec, events, **kw)}", flush=True)
     if "--latency-only" in sys.argv:
         return
