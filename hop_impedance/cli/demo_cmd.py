@@ -57,6 +57,8 @@ def run(args: argparse.Namespace) -> int:
           f"impedance_estimator -> recorder ({'separate processes' if args.processes else 'one process'})")
     report = run_pipeline(config)
     code = print_report(report, config.recording, args.tolerate_loss)
+    for line in seed_lines(report):
+        print(line)
     if args.rrd:
         from hop_impedance.viz.session import write_rrd
 
@@ -64,3 +66,30 @@ def run(args: argparse.Namespace) -> int:
         print(f"Rerun view ({summary.stances} stances, {summary.fitted_stances} fitted): {args.rrd}; "
               f"open it with: .venv/bin/rerun {args.rrd}")
     return code
+
+
+def seed_lines(report) -> list[str]:
+    """The run's accepted profiles against the seed's findings (:mod:`hop_impedance.impedance.seed_findings`).
+
+    Hop frequency: median of the stances'; body mass: peak GRF in newtons over peak GRF in body weights.
+    """
+    import math
+
+    import numpy as np
+
+    from hop_impedance.impedance.seed_findings import JointStance, seed_findings
+    from hop_impedance.recording import GRAVITY_M_S2
+
+    freqs = [s.hop_frequency_hz for s in report.summaries if math.isfinite(s.hop_frequency_hz)]
+    masses = [s.peak_grf_n / s.peak_grf_bw / GRAVITY_M_S2 for s in report.summaries if s.peak_grf_bw > 0]
+    stances: dict[str, list[JointStance]] = {}
+    for p in report.profiles:
+        if not p.accepted or p.rejection_reason:
+            continue
+        c = dict(zip(p.terms, p.coefficients))
+        stances.setdefault(p.joint, []).append(JointStance(
+            c.get("k0", 0.0), c.get("k1", 0.0), "k1" in p.stance_terms, p.sse_variable, p.sse_constant,
+            p.initial_stiffness_nm_per_rad, p.max_stiffness_nm_per_rad))
+    if not freqs or not stances:
+        return ["against the seed: no accepted stance with a hop frequency"]
+    return seed_findings(stances, float(np.median(freqs)), float(np.median(masses)) if masses else math.nan)
