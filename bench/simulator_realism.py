@@ -122,7 +122,12 @@ def measure(freq_hz: float, hops: int = 6, seed: int = 1, trunk: bool = False, f
                                     touchdown_rho_rad=posture, trunk_balance=TRUNK_BALANCE if trunk else None,
                                     flight=flight, contact_ahead_m=contact_ahead_m, push_timing=push_timing,
                                     bell_activation_min=bell_activation_min, law_scale=law_scale)
-    analysis = analyze_recording(rec)
+    return summarise(freq_hz, rec, truth, fits)
+
+
+def summarise(freq_hz: float, rec, truth: dict, fits: bool = False, analysis=None) -> dict:
+    """:func:`measure`'s figures of a simulated recording and its truth (``analysis``: its analysis, if made)."""
+    analysis = analyze_recording(rec) if analysis is None else analysis
     doc = analysis_to_json(analysis)
     if fits:  # the per-stance Eq. 3 fit that `hop-impedance analyze` adds, with k0, k1, b0 for every joint
         from hop_impedance.cli.analyze_cmd import add_fits_to_json
@@ -175,6 +180,22 @@ def measure(freq_hz: float, hops: int = 6, seed: int = 1, trunk: bool = False, f
     mean["notes"] = list(truth["notes"]) + ([f"stopped: {truth['stop_reason']}"] if truth["stop_reason"] else [])
     mean["n_stances"] = len(rows)
     return mean
+
+
+def binding_cells(results: dict) -> list[tuple[str, float, float, float, float]]:
+    """Issue 17's binding Table 1 cells: (quantity, frequency, simulated, seed, band) for each seed frequency in
+    ``results`` (:func:`measure`'s dicts by frequency); a cell is out when |simulated / seed - 1| > band."""
+    cells = []
+    for f in (f for f in SEED_TABLE1 if f in results):
+        r, seed = results[f], SEED_TABLE1[f]
+        cells += [("stance time (ms)", f, r["stance_ms"], seed["stance_ms"], BANDS["stance"]),
+                  ("peak GRF (BW)", f, r["grf_bw"], seed["grf_bw"], BANDS["grf"]),
+                  ("hip vertical excursion (m)", f, r["hip_exc_m"], seed["hip_exc_m"], BANDS["hip_exc"])]
+        cells += [(f"{name} range of flexion (rad)", f, r["rom"][j], seed["rom"][j], BANDS["rom"])
+                  for j, name in enumerate(("ankle", "knee", "hip"))]
+        cells += [(f"{name} max moment (N m)", f, r["mmax"][j], seed["mmax"][j], BANDS["mmax"])
+                  for j, name in enumerate(("ankle", "knee"))]
+    return cells
 
 
 def table(results: dict, hopexo: dict) -> str:
@@ -327,17 +348,21 @@ SEED_LIKE_END = "<!-- simulator_realism --seed-like table end -->"
 def write_seed_like(text: str, newton: str, notes: list[str], setup: str) -> None:
     """``--seed-like --write``: the tables between docs/simulator.md's markers (the README's table is the default
     hopper's, whose recordings the README shows, so it is left alone)."""
-    doc = ROOT / "docs" / "simulator.md"
-    body = doc.read_text()
-    if SEED_LIKE_BEGIN not in body or SEED_LIKE_END not in body:
-        raise SystemExit(f"{doc}: no {SEED_LIKE_BEGIN} marker; nothing written")
-    head, rest = body.split(SEED_LIKE_BEGIN, 1)
-    _, tail = rest.split(SEED_LIKE_END, 1)
     block = (f"Written by `.venv/bin/python bench/simulator_realism.py --seed-like --write` ({setup}):\n\n{text}\n\n"
              + "".join(f"- note: {n}\n" for n in notes) + "\nSeed Table 1 against Newton (no simulation):\n\n"
              + newton + "\n")
-    doc.write_text(head + SEED_LIKE_BEGIN + "\n" + block + SEED_LIKE_END + tail)
-    print(f"wrote the --seed-like tables in {doc}")
+    replace_between_markers(ROOT / "docs" / "simulator.md", SEED_LIKE_BEGIN, SEED_LIKE_END, block)
+
+
+def replace_between_markers(doc: Path, begin: str, end: str, block: str) -> None:
+    """Put ``block`` between the lines ``begin`` and ``end`` of ``doc`` (exits if a marker is missing)."""
+    body = doc.read_text()
+    if begin not in body or end not in body:
+        raise SystemExit(f"{doc}: no {begin} marker; nothing written")
+    head, rest = body.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    doc.write_text(head + begin + "\n" + block + end + tail)
+    print(f"wrote the tables between {begin} and {end} in {doc}")
 
 
 README_BEGIN = "<!-- simulator_realism table begin -->"

@@ -41,17 +41,29 @@ def fitted_k0_k1(recording) -> np.ndarray:
     force plate, 12 Hz low-pass, 2D inverse dynamics; every joint fitted with the given terms).
     """
     from hop_impedance.biomech.analysis import analyze_recording
+
+    return median_k0_k1(seed_model_fits(analyze_recording(recording)))
+
+
+def seed_model_fits(analysis) -> list[dict]:
+    """Per stance ``{joint: fit}`` with the terms :data:`FIT_TERMS`, the complete fitted stances after the first.
+
+    ``analysis``: :func:`~hop_impedance.biomech.analysis.analyze_recording`'s result.
+    """
     from hop_impedance.impedance.recording_fits import fit_recording_trial, given_structure
 
-    analysis = analyze_recording(recording)
     structure = given_structure(FIT_TERMS, "law calibration (simulation/fit_calibration.py)")
     trial = fit_recording_trial(analysis, structures={j: structure for j in ("ankle", "knee", "hip")})
-    rows = [[[fits[j].coefficients[c] for j in ("ankle", "knee", "hip")] for c in ("k0", "k1")]
-            for stance, fits in zip(analysis.stances, trial.fits)
+    kept = [fits for stance, fits in zip(analysis.stances, trial.fits)
             if stance.complete and stance.joints is not None and all(f.rejection_reason is None for f in fits.values())]
-    rows = rows[1:]  # the first stance lands from the lead-in
-    if not rows:
+    return kept[1:]  # the first stance lands from the lead-in
+
+
+def median_k0_k1(stance_fits: list[dict]) -> np.ndarray:
+    """Median over stances of the fitted (k0, k1) per joint, shape (2, 3) (:func:`seed_model_fits`' stances)."""
+    if not stance_fits:
         raise ValueError("no fitted complete stance after the first")
+    rows = [[[fits[j].coefficients[c] for j in ("ankle", "knee", "hip")] for c in ("k0", "k1")] for fits in stance_fits]
     return np.median(np.array(rows, float), axis=0)
 
 

@@ -108,28 +108,14 @@ def test_seed_like_hopper_keeps_seed_001_directions_on_an_unexpected_hard_surfac
     knee. The bell activation is fixed in time since touchdown and blind to the surface, as seed 001's
     pre-programmed activation (which this test used before the bell: -2.6 %, 0.010 / 0.018 / 0.009 rad);
     measured with the bell: -4.7 %, 0.021 / 0.023 / 0.012 rad (the default hopper's test_sim_trials asks
-    <= -3 % and >= 0.02 rad)."""
-    from hop_impedance.simulation.ground import HARD, SOFT
-    from hop_impedance.simulation.hopping_trial import (
-        calibrate,
-        leg_stiffness_n_per_m,
-        scale_push_off,
-        touchdown_posture,
-        touchdown_state,
-    )
-    from hop_impedance.simulation.scenarios import Effects, hopping_config
-    from hop_impedance.simulation.stance import simulate_stance
+    <= -3 % and >= 0.02 rad). Seed 001's "joint stiffness ... most pronounced at the ankle" does not hold here
+    (ankle -0.7 %, knee +1.1 %, hip -7.0 %; bench/simulator_issue17.py's seed 001 rows), so it is not asserted."""
+    from hop_impedance.simulation.surface_surprise import unexpected_hard_vs_soft
 
-    chain, cfg = hopping_config(2.2, "soft", 1, Effects(), variability=False, **seed_like_options())
-    q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
-    cal = calibrate(chain, cfg, q)
-    assert cal.success
-    law = scale_push_off(cfg.law, cal.push_scale)
-    td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
-    kw = {"friction_coefficient": cfg.friction_coefficient, "trunk_balance": cfg.trunk_balance}
-    soft_stance, hard_stance = simulate_stance(chain, law, SOFT, td, **kw), simulate_stance(chain, law, HARD, td, **kw)
-    soft, hard = leg_stiffness_n_per_m(chain, soft_stance), leg_stiffness_n_per_m(chain, hard_stance)
+    s = unexpected_hard_vs_soft(2.2, **seed_like_options())
+    soft, hard = s.leg_soft, s.leg_hard
     assert hard[0] < 0.99 * soft[0] and hard[2] > soft[2] and hard[1] > soft[1]
-    extra = (np.max(hard_stance.rho_rad, axis=0) - hard_stance.rho_rad[0]) - (
-        np.max(soft_stance.rho_rad, axis=0) - soft_stance.rho_rad[0])
+    extra = s.extra_flexion_rad
     assert extra[0] > 0.005 and extra[1] > 0.005 and 0.0 < extra[2] < extra[1]
+    directions = s.directions()
+    assert directions["leg stiffness falls"] and directions["ankle and knee flex more, the hip less"]

@@ -1,0 +1,42 @@
+"""Seed 001's joint stiffness (simulation/surface_surprise.py) against the law that made the moments."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hop_impedance.simulation.hopping_trial import touchdown_posture, touchdown_state
+from hop_impedance.simulation.scenarios import Effects, hopping_config, seed_stiffness
+from hop_impedance.simulation.stance import simulate_stance
+from hop_impedance.simulation.surface_surprise import SurfaceSurprise, joint_stiffness_nm_rad
+
+
+@pytest.mark.parametrize("k1", [False, True])
+def test_joint_stiffness_is_the_springs_secant_to_maximal_flexion(k1):
+    """Without damping, push-off, activation or trunk balance the moment is the Eq. 3 spring
+    M = k0 dr + k1 dr^2 / 2, so the slope from touchdown to maximal flexion is k0 + k1 dr_max / 2
+    (k0 alone without k1), whatever the stance's dynamics."""
+    effects = Effects(angle_dependent_stiffness=k1, damping=False, push_off=False)
+    chain, cfg = hopping_config(2.2, "hard", 1, effects, variability=False)
+    q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
+    st = simulate_stance(chain, cfg.law, cfg.surface, touchdown_state(chain, q, np.array([0.0, -1.2]), 0.0),
+                         sample_times_s=np.linspace(0.0, 0.3, 3001))
+    k0, k1_law = seed_stiffness(2.2)
+    dr_max = st.rho_rad.max(axis=0) - st.rho_rad[0]
+    assert np.all(dr_max > 0.05)  # every joint flexes
+    expected = k0 + (k1_law * dr_max / 2.0 if k1 else 0.0)
+    np.testing.assert_allclose(joint_stiffness_nm_rad(st), expected, rtol=1e-6)
+
+
+def test_directions_read_the_relative_changes():
+    """Leg stiffness falls; ankle and knee flex more, the hip less; the ankle's relative fall is the largest."""
+    base = {"leg_soft": (20e3, 1500.0, 0.075), "extra_flexion_rad": np.array([0.02, 0.03, 0.01]),
+            "joint_stiffness_soft": np.array([500.0, 300.0, 100.0])}
+    s = SurfaceSurprise(leg_hard=(19e3, 1520.0, 0.08), joint_stiffness_hard=np.array([450.0, 290.0, 99.0]), **base)
+    assert s.leg_change == pytest.approx(-0.05)
+    np.testing.assert_allclose(s.joint_change, [-0.1, -1 / 30, -0.01])
+    assert all(s.directions().values())
+    # The ankle falls most in N m/rad (-50) but not relatively (-10 % against the hip's -20 %): not "most".
+    s = SurfaceSurprise(leg_hard=(21e3, 1600.0, 0.076), joint_stiffness_hard=np.array([450.0, 290.0, 80.0]), **base)
+    assert s.directions() == {"leg stiffness falls": False, "ankle and knee flex more, the hip less": True,
+                              "joint stiffness falls most at the ankle": False}
