@@ -1,0 +1,62 @@
+"""Issue 17's Table 1 rule as bench/simulator_issue17.py applies it (no simulation): which cells are binding,
+their bands, and "at most 3 out, none of them stance time, peak GRF or the ankle"."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+BENCH = Path(__file__).resolve().parents[2] / "bench"
+
+
+@pytest.fixture(scope="module")
+def issue17():
+    sys.path.insert(0, str(BENCH))
+    try:
+        import simulator_issue17
+    finally:
+        sys.path.remove(str(BENCH))
+    return simulator_issue17
+
+
+def measures(issue17, factors: dict) -> dict:
+    """Seed Table 1 itself times ``factors`` {(quantity, frequency): factor}, as the bench's measures."""
+    out = {}
+    for f, seed in issue17.SEED_TABLE1.items():
+        realism = {"stance_ms": seed["stance_ms"], "grf_bw": seed["grf_bw"], "hip_exc_m": seed["hip_exc_m"],
+                   "rom": np.array(seed["rom"], float), "mmax": np.array(seed["mmax"], float)}
+        for (key, g, j), factor in factors.items():
+            if g == f:
+                if j is None:
+                    realism[key] = realism[key] * factor
+                else:
+                    realism[key][j] *= factor
+        out[f] = issue17.FrequencyMeasure(realism, {}, np.zeros((2, 3)), {}, {}, {})
+    return out
+
+
+def test_binding_cells_are_issue_17s_eight_per_frequency_with_its_bands(issue17):
+    """Stance time, peak GRF, hip excursion 15 %; the three ranges of flexion 20 %; ankle and knee moment 25 %
+    (the hip's moment is reported, not binding)."""
+    rows, out = issue17.realism_rows(measures(issue17, {}))
+    assert out == [] and all(r.passed for r in rows) and len(rows) == 9
+    assert [r.band for r in rows[:-1]] == ["within 15%"] * 3 + ["within 20%"] * 3 + ["within 25%"] * 2
+    assert not any("hip max moment" in r.criterion for r in rows)
+
+
+def test_three_cells_out_pass_unless_one_is_stance_grf_or_ankle(issue17):
+    allowed = {("hip_exc_m", 1.87, None): 0.7, ("hip_exc_m", 2.2, None): 0.84, ("mmax", 1.53, 1): 1.26}
+    rows, out = issue17.realism_rows(measures(issue17, allowed))
+    assert out == ["hip vertical excursion (m) at 1.87 Hz", "hip vertical excursion (m) at 2.2 Hz",
+                   "knee max moment (N m) at 1.53 Hz"]
+    assert rows[-1].passed
+    rows, out = issue17.realism_rows(measures(issue17, {("stance_ms", 2.2, None): 0.851}))  # inside the band
+    assert out == [] and rows[-1].passed
+    for forbidden in (("stance_ms", 2.2, None), ("grf_bw", 1.53, None), ("rom", 1.87, 0), ("mmax", 2.2, 0)):
+        rows, out = issue17.realism_rows(measures(issue17, {forbidden: 0.7}))
+        assert len(out) == 1 and not rows[-1].passed, forbidden
+    rows, out = issue17.realism_rows(measures(issue17, {**allowed, ("rom", 1.53, 2): 0.5}))
+    assert len(out) == 4 and not rows[-1].passed
