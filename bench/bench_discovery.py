@@ -2,8 +2,10 @@
 
 Every candidate is identified leave-one-stance-out and simulated forward on every held-out stance
 (issue 16); the held-out simulations run in a process pool (``--workers``, default 2).
-Prints the total, the time per selection round and the mean time per candidate (a candidate's share
-of its round's pool time).
+Prints the total, the time per phase (body split searches, baseline, selection rounds, stiffness
+searches with their evaluations of all stances), the mean time per candidate (a candidate's share of its
+round's pool time), the CPU time of the run (this process and its worker processes: less dependent on
+the machine's load than the wall time) and the load average before and after.
 
 Usage: .venv/bin/python bench/bench_discovery.py [--workers N] [--recording REC.mcap]
 """
@@ -11,6 +13,8 @@ Usage: .venv/bin/python bench/bench_discovery.py [--workers N] [--recording REC.
 from __future__ import annotations
 
 import argparse
+import os
+import resource
 import time
 
 from hop_impedance.discovery.workflow import discover
@@ -29,16 +33,32 @@ def main() -> None:
     else:
         eff = Effects(angle_dependent_stiffness=True, damping=False, push_off=False)
         rec, _ = simulate_stance_set_recording(2.2, ("rigid",), 10, seed=1, effects=eff, rtol=1e-6)
-    t0 = time.perf_counter()
+    load0 = os.getloadavg()[0]
+    cpu0, t0 = _cpu_s(), time.perf_counter()
     doc = discover(rec, workers=args.workers)
-    total = time.perf_counter() - t0
+    total, cpu = time.perf_counter() - t0, _cpu_s() - cpu0
     tm = doc["timing"]
+    after = [b["seconds"] for b in doc["nuisance"].get("body_mass_split_after_step", [])]
+    searches = [[(name, g["evaluations"], *g["in_sample_gap_regression_shot"])
+                 for name, g in [("current", st["current"]), *st["candidates"].items()]]
+                for st in doc["selection"]["stiffness_through_simulation"]]
     print(f"recording: {args.recording or '10-hop simulated, angle-dependent stiffness'}; "
           f"stances used {len(doc['stances']['used'])}; effects found: {doc['effects_found']}")
-    print(f"discover total: {total:.1f} s (body split search {tm['body_s']:.1f} s; baseline held-out runs "
+    print(f"discover total: {total:.1f} s (body split search {tm['body_s']:.1f} s, again after each step "
+          + (", ".join(f"{b:.1f}" for b in after) or "-") + f" s; baseline held-out runs "
           f"{tm['baseline_s']:.1f} s; rounds " + ", ".join(f"{r:.1f}" for r in tm["rounds"]) + " s; stiffness gate "
           + (", ".join(f"{r:.1f}" for r in tm["stiffness_s"]) or "not needed") + " s)")
+    print("stiffness searches per gate (model, evaluations of all stances, in-sample gap with the regression's k0 "
+          "and with the shot k0; a current model named in the round before reuses that search): " + str(searches))
+    print(f"CPU time (this process and its workers): {cpu:.1f} s; load average (1 min) before {load0:.2f}, "
+          f"after {os.getloadavg()[0]:.2f}")
     print("mean time per candidate (s): " + ", ".join(f"{k} {v:.1f}" for k, v in tm["per_candidate_s"].items()))
+
+
+def _cpu_s() -> float:
+    """User + system CPU time of this process and of its ended child processes (the pool's workers) (s)."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 if __name__ == "__main__":

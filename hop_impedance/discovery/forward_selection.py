@@ -168,8 +168,11 @@ def _stance_by_index(trial: MeasuredTrial, index: int) -> MeasuredStance | None:
 
 
 def simulate_held_out(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: MeasuredStance,
-                      scales: np.ndarray) -> dict:
-    """Forward-simulate stance ``s`` with the identified model; gap figures of that stance."""
+                      scales: np.ndarray, samples: bool = False) -> dict:
+    """Forward-simulate stance ``s`` with the identified model; gap figures of that stance.
+
+    ``samples``: also its scaled residuals (:func:`_gap_of`), for a least-squares search over parameters.
+    """
     coefs = per_stance_push_off(spec, coefs, s)
     m0 = touchdown_moments(spec, coefs, s)
     law = FittedLaw(spec, np.asarray(coefs, float), m0)
@@ -179,12 +182,17 @@ def simulate_held_out(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, 
                               rtol=RTOL, atol=ATOL, sample_times_s=s.t_s)
     except RuntimeError as exc:
         return {"gap": np.inf, "rms": np.full(7, np.nan), "duration_error_s": np.nan, "net_work_j": np.nan,
-                "end_reason": f"failed: {exc}"}
-    return _gap_of(sim, s, spec.offset_n, scales)
+                "end_reason": f"failed: {exc}", "samples": None, "terms": None}
+    return _gap_of(sim, s, spec.offset_n, scales, samples)
 
 
-def _gap_of(sim, s: MeasuredStance, offset_n: float, scales: np.ndarray) -> dict:
-    """Gap figures of one simulated stance against the measured one (see module docstring)."""
+def _gap_of(sim, s: MeasuredStance, offset_n: float, scales: np.ndarray, samples: bool = False) -> dict:
+    """Gap figures of one simulated stance against the measured one (see module docstring).
+
+    ``samples``: also ``samples`` (n, 7), the residuals of :data:`GAP_SIGNALS` per sample over their scales,
+    and ``terms``, the signed duration, net-work and flight errors over theirs, so that
+    ``gap = (sum(samples**2) / n + sum(terms**2)) / 10``: a sum of squares (the stiffness gate's search).
+    """
     n = len(sim.t_s)
     res = [s.fz_raw_n[:n] - (sim.grf_n[:, 1] + offset_n)]
     res += [s.rho_rad[:n, j] - sim.rho_rad[:, j] for j in range(3)]
@@ -195,10 +203,13 @@ def _gap_of(sim, s: MeasuredStance, offset_n: float, scales: np.ndarray) -> dict
     work_error = work - measured_net_work_j(s)
     # the flight before the stance: the model predicts zero force there (plus its plate offset)
     flight = float(np.mean(s.flight_fz_n) - offset_n) if s.flight_fz_n.size else 0.0
-    terms = np.r_[(rms / scales[:7]) ** 2, (duration_error / scales[7]) ** 2, (work_error / scales[8]) ** 2,
-                  (flight / scales[9]) ** 2]
-    return {"gap": float(np.mean(terms)), "rms": rms, "duration_error_s": duration_error, "net_work_j": work,
-            "end_reason": sim.end_reason}
+    signed = np.array([duration_error / scales[7], work_error / scales[8], flight / scales[9]])
+    terms = np.r_[(rms / scales[:7]) ** 2, signed**2]
+    out = {"gap": float(np.mean(terms)), "rms": rms, "duration_error_s": duration_error, "net_work_j": work,
+           "end_reason": sim.end_reason}
+    if samples:
+        out.update(samples=np.stack(res, axis=1) / scales[:7], terms=signed)
+    return out
 
 
 def _run_one(task: tuple) -> dict:
@@ -217,14 +228,15 @@ def _run_one(task: tuple) -> dict:
     return simulate_held_out(fitted, coefs, measured, s, _CONTEXT["scales"])
 
 
-def _in_sample_one(task: tuple) -> float:
-    """Simulate stance ``index`` with given coefficients (nothing identified): its gap ``G_i``."""
+def _in_sample_one(task: tuple) -> dict:
+    """Simulate stance ``index`` with given coefficients (nothing identified): its gap ``G_i`` and residuals."""
     spec, coefs, index = task
     trial = trial_for(spec)
     s = _stance_by_index(trial, index)
     if s is None:
-        return np.inf
-    return simulate_held_out(spec, coefs, trial, s, _CONTEXT["scales"])["gap"]
+        return {"gap": np.inf, "samples": None, "terms": None}
+    out = simulate_held_out(spec, coefs, trial, s, _CONTEXT["scales"], samples=True)
+    return {k: out[k] for k in ("gap", "samples", "terms")}
 
 
 class HeldOutEvaluator:
@@ -257,9 +269,18 @@ class HeldOutEvaluator:
 
     def stance_gaps(self, spec: ModelSpec, coefs: np.ndarray) -> np.ndarray:
         """Per-stance gap ``G_i`` of the fitted ``spec`` with ``coefs`` on every stance (in-sample, nothing identified)."""
-        tasks = [(spec, coefs, s.index) for s in self.trial.stances]
+        return np.array([r["gap"] for r in self.stance_residuals(spec, [coefs])[0]])
+
+    def stance_residuals(self, spec: ModelSpec, coef_sets: list[np.ndarray]) -> list[list[dict]]:
+        """In-sample runs of ``spec`` with each of ``coef_sets`` on every stance, all in one pool map.
+
+        Per coefficient set, per stance: ``gap``, ``samples`` and ``terms`` (:func:`_gap_of`; None if it failed).
+        """
+        n = len(self.trial.stances)
+        tasks = [(spec, c, s.index) for c in coef_sets for s in self.trial.stances]
         pool = self._pool
-        return np.array(list(pool.map(_in_sample_one, tasks)) if pool else [_in_sample_one(t) for t in tasks])
+        out = list(pool.map(_in_sample_one, tasks)) if pool else [_in_sample_one(t) for t in tasks]
+        return [out[k * n:(k + 1) * n] for k in range(len(coef_sets))]
 
     def run(self, spec: ModelSpec, effects: list) -> list[HeldOutRuns]:
         """Held-out runs of ``spec`` with each of ``effects`` added (None = ``spec`` itself)."""

@@ -262,22 +262,26 @@ class FittedLaw(ImpedanceLaw):
     n_states = 6 + 3 * len(ELASTIC_ALL)
 
     def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102
+        # all three joints in one call of features() (joint axis before the regressor axis): the same
+        # regressors as the fit; the simulator calls this at every step, so it is its hot path
         dr = np.asarray(rho, float) - ref.rho0_rad
         dw = np.asarray(omega, float) - ref.omega0_rad_s
         s = np.asarray(states, float)
-        t = np.broadcast_to(np.asarray(t_s, float), dr.shape[:-1])
-        return np.stack([self.touchdown_moment_nm[j] + features(self.spec, t, dr[..., j], dw[..., j], s[..., j],
-                                                                s[..., 3 + j], s[..., 6 + j::3])
-                         @ self.coefficients[j] for j in range(3)], axis=-1)
+        t = np.broadcast_to(np.asarray(t_s, float)[..., None], dr.shape)
+        tangent = np.swapaxes(s[..., 6:].reshape(s.shape[:-1] + (len(ELASTIC_ALL), 3)), -1, -2)
+        f = features(self.spec, t, dr, dw, s[..., 0:3], s[..., 3:6], tangent)
+        return self.touchdown_moment_nm + np.einsum("...jk,jk->...j", f, self.coefficients)
 
     def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102
         w = np.asarray(omega, float)
         w0 = ref.omega0_rad_s
-        g = activation_modulation(self.spec, t_s) if self.spec.has("time_dependent_activation") else 0.0
-        g = np.asarray(g, float)[..., None] if np.ndim(g) else g
+        rates = [(w - w0) * w, (np.abs(w) - np.abs(w0)) * w]
+        if not self.spec.has("time_dependent_activation"):  # the activation integrals stay 0
+            return np.concatenate(rates + [np.zeros(w.shape[:-1] + (3 * len(ELASTIC_ALL),))], axis=-1)
+        g = np.asarray(activation_modulation(self.spec, t_s), float)
+        g = g[..., None] if g.ndim else g
         dr = np.asarray(rho, float) - ref.rho0_rad
-        return np.concatenate([(w - w0) * w, (np.abs(w) - np.abs(w0)) * w]
-                              + [g * r for r in elastic_rates(dr, w, w0)], axis=-1)
+        return np.concatenate(rates + [g * r for r in elastic_rates(dr, w, w0)], axis=-1)
 
     def to_dict(self) -> dict:  # noqa: D102
         names = feature_names(self.spec)

@@ -161,6 +161,7 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
     spec = ModelSpec(body_fraction=body.fraction)
     spec_fit, coefs = identify(spec, trial, trial.stances)
     timing: dict = {"per_candidate_s": {}, "rounds": [], "stiffness_s": []}
+    shots: dict = {}  # stiffness searches by model, for the next round's current model (_gated)
     with fs.HeldOutEvaluator(rec, trial, workers) as ev:
         current = ev.run(spec, [None])[0]
         timing["baseline_s"] = current.seconds
@@ -173,7 +174,7 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
             if not cands:
                 break
             scores = _scored_round(ev, spec, trial, current, cands, timing)
-            ok, gates = _gated(ev, spec_fit, coefs, scores, len(cands), doc, timing)
+            ok, gates = _gated(ev, (spec_fit, coefs), scores, len(cands), doc, timing, shots)
             doc["selection"]["rounds"].append(_round_json(scores, len(cands), scales, gates))
             if not ok:
                 break
@@ -196,31 +197,39 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
     return doc
 
 
-def _gated(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, coefs: np.ndarray, scores: list[fs.ForwardScore],
-           n_candidates: int, doc: dict, timing: dict) -> tuple[list[fs.ForwardScore], dict]:
+def _gated(ev: fs.HeldOutEvaluator, fitted: tuple[ModelSpec, np.ndarray], scores: list[fs.ForwardScore],
+           n_candidates: int, doc: dict, timing: dict, shots: dict) -> tuple[list[fs.ForwardScore], dict]:
     """The candidate to name (at most one) and the stiffness gate's figures by effect.
 
-    Only when some candidate passed the held-out test is the current model's k0 chosen through the
+    Only when some candidate passed the held-out test is the current model's k0 (``fitted``: the model and
+    its coefficients identified on all stances) chosen through the
     simulation, then that of each passing candidate in the order of its mean log gap ratio until one beats
     the current model so (:mod:`hop_impedance.discovery.stiffness_gate`); the figures go to
-    ``selection.stiffness_through_simulation``, the searches' time to ``timing.stiffness_s``.
+    ``selection.stiffness_through_simulation``, the searches' time to ``timing.stiffness_s``. ``shots``
+    keeps every search by model: the candidate named in one round is the next round's current model (same
+    body split: same model and coefficients), whose search is then not repeated.
     """
     ok = sorted((sc for sc in scores if fs.passes(sc, n_candidates)), key=lambda sc: -sc.mean_log_ratio)
     if not ok:
         return [], {}
     t0 = time.perf_counter()
-    shot = shoot_stiffness(ev, spec_fit, coefs)
+    shot = shots.get(_model_key(*fitted)) or shoot_stiffness(ev, *fitted)
     gates: dict = {}
     for sc in ok:
         trial = fs.trial_for(sc.runs.spec)
-        cand_fit, cand_coefs = identify(sc.runs.spec, trial, trial.stances)
-        gates[sc.effect] = gate(shoot_stiffness(ev, cand_fit, cand_coefs, shot), shot, n_candidates)
+        cand = identify(sc.runs.spec, trial, trial.stances)
+        shots[_model_key(*cand)] = shoot_stiffness(ev, *cand, shot)
+        gates[sc.effect] = gate(shots[_model_key(*cand)], shot, n_candidates)
         if gates[sc.effect]["passes"]:
             break
     doc["selection"]["stiffness_through_simulation"].append(
         {"round": len(doc["selection"]["rounds"]), "current": shot.as_json(), "candidates": gates})
     timing["stiffness_s"].append(time.perf_counter() - t0)
     return [sc for sc in ok if gates.get(sc.effect, {}).get("passes")], gates
+
+
+def _model_key(spec_fit: ModelSpec, coefs: np.ndarray) -> tuple:
+    return spec_fit, np.asarray(coefs, float).tobytes()
 
 
 def _body_for(rec: Recording, trial: MeasuredTrial, spec: ModelSpec, workers: int | None,

@@ -55,3 +55,38 @@ def test_a_strict_null_named_by_the_held_out_test_is_stopped_by_the_shot_stiffne
         shot_cand = shoot_stiffness(ev, cand_fit, cand_coefs)
     assert np.mean(shot.gaps) < 0.5 * shot.gap_regression, shot.as_json()
     assert not gate(shot_cand, shot, 8)["passes"], shot_cand.as_json()
+
+
+def test_the_shot_stiffness_finds_the_generators_k0_where_the_joint_moves():
+    """Known truth: strict null seed 3 of the second generator (8 hops) with its own segment parameters given to
+    the analysis. The regression's k0 is 276/281/94 N m/rad against the generator's 265/270/138 and its
+    in-sample forward gap 0.0345 against the true law's 0.0194 (``bench/discovery_strict_floor.py --seeds 3``).
+    Levenberg-Marquardt through the simulation (session 9) brings the ankle and knee from 4 % off to within 3 %
+    of the generator's k0 (measured 264/275 N m/rad), and the gap below the true law's (0.0089), within its
+    budget of evaluations. The hip (0.04-0.17 rad in stance) is not asserted: the gap barely determines its k0."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+    from discovery_body_nuisance import generator_overrides
+    from discovery_truth_gap import STRICT_GROUND
+
+    from hop_impedance.biomech.analysis import AnalysisOptions
+    from hop_impedance.discovery.model import FittedLaw
+    from hop_impedance.discovery.stiffness_gate import MAX_EVALUATIONS
+
+    cfg = StrictConfig(seed=3, hops=8)
+    rec, truth = strict_recording(cfg)
+    trial = measure_trial(rec, options=AnalysisOptions(overrides=generator_overrides(cfg)))
+    hops = [min(truth["per_hop"], key=lambda h: abs(h["t_td"] - s.touchdown_s)) for s in trial.stances]
+    true_laws = [FittedLaw(ModelSpec(), np.array(h["k0"], float)[:, None], np.asarray(h["M_td"], float)) for h in hops]
+    gap_true = float(np.mean(fs.law_gaps(trial, true_laws, [STRICT_GROUND] * len(hops))))
+    spec_fit, coefs = identify(ModelSpec(), trial, trial.stances)
+    with fs.HeldOutEvaluator(rec, trial) as ev:
+        shot = shoot_stiffness(ev, spec_fit, coefs)
+    k0_true = np.array(hops[0]["k0"], float)
+    k0_shot = shot.k0_regression * shot.factors
+    assert shot.method == "levenberg-marquardt" and shot.evaluations <= MAX_EVALUATIONS
+    assert shot.gap_regression > 1.5 * gap_true  # the case: the regression's k0 is far from the floor
+    assert np.mean(shot.gaps) < gap_true, (shot.as_json(), gap_true)
+    np.testing.assert_allclose(k0_shot[:2], k0_true[:2], rtol=0.03, err_msg=str(shot.as_json()))
