@@ -7,7 +7,10 @@ searches with their evaluations of all stances), the mean time per candidate (a 
 round's pool time), the CPU time of the run (this process and its worker processes: less dependent on
 the machine's load than the wall time) and the load average before and after.
 
+``--search``: the stiffness gate's k0 search (:data:`hop_impedance.discovery.stiffness_gate.SEARCH`).
+
 Usage: .venv/bin/python bench/bench_discovery.py [--workers N] [--recording REC.mcap]
+       [--search nelder-mead|levenberg-marquardt]
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import os
 import resource
 import time
 
+from hop_impedance.discovery import stiffness_gate
 from hop_impedance.discovery.workflow import discover
 from hop_impedance.io.recording_io import load_recording
 from hop_impedance.simulation.scenarios import Effects
@@ -27,7 +31,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=None)
     ap.add_argument("--recording", default="", help="an MCAP recording instead of the simulated 10-hop one")
+    ap.add_argument("--search", choices=("nelder-mead", "levenberg-marquardt"), default=stiffness_gate.SEARCH)
     args = ap.parse_args()
+    stiffness_gate.SEARCH = args.search
     if args.recording:
         rec = load_recording(args.recording)
     else:
@@ -42,7 +48,7 @@ def main() -> None:
     searches = [[(name, g["evaluations"], *g["in_sample_gap_regression_shot"])
                  for name, g in [("current", st["current"]), *st["candidates"].items()]]
                 for st in doc["selection"]["stiffness_through_simulation"]]
-    print(f"recording: {args.recording or '10-hop simulated, angle-dependent stiffness'}; "
+    print(f"recording: {args.recording or '10-hop simulated, angle-dependent stiffness'}; search {args.search}; "
           f"stances used {len(doc['stances']['used'])}; effects found: {doc['effects_found']}")
     print(f"discover total: {total:.1f} s (body split search {tm['body_s']:.1f} s, again after each step "
           + (", ".join(f"{b:.1f}" for b in after) or "-") + f" s; baseline held-out runs "

@@ -73,7 +73,7 @@ def test_the_shot_stiffness_finds_the_generators_k0_where_the_joint_moves():
 
     from hop_impedance.biomech.analysis import AnalysisOptions
     from hop_impedance.discovery.model import FittedLaw
-    from hop_impedance.discovery.stiffness_gate import MAX_EVALUATIONS
+    from hop_impedance.discovery.stiffness_gate import LM_MAX_EVALUATIONS
 
     cfg = StrictConfig(seed=3, hops=8)
     rec, truth = strict_recording(cfg)
@@ -83,10 +83,10 @@ def test_the_shot_stiffness_finds_the_generators_k0_where_the_joint_moves():
     gap_true = float(np.mean(fs.law_gaps(trial, true_laws, [STRICT_GROUND] * len(hops))))
     spec_fit, coefs = identify(ModelSpec(), trial, trial.stances)
     with fs.HeldOutEvaluator(rec, trial) as ev:
-        shot = shoot_stiffness(ev, spec_fit, coefs)
+        shot = shoot_stiffness(ev, spec_fit, coefs, method="levenberg-marquardt")
     k0_true = np.array(hops[0]["k0"], float)
     k0_shot = shot.k0_regression * shot.factors
-    assert shot.method == "levenberg-marquardt" and shot.evaluations <= MAX_EVALUATIONS
+    assert shot.method == "levenberg-marquardt" and shot.evaluations <= LM_MAX_EVALUATIONS
     assert shot.gap_regression > 1.5 * gap_true  # the case: the regression's k0 is far from the floor
     assert np.mean(shot.gaps) < gap_true, (shot.as_json(), gap_true)
     np.testing.assert_allclose(k0_shot[:2], k0_true[:2], rtol=0.03, err_msg=str(shot.as_json()))
