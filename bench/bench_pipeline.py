@@ -165,7 +165,11 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> str:
             f"{sum(before_next)}/{len(before_next)}; fit of 3 joints p50/p99 {d('/impedance_estimator', 'fit_p50_ms')}/"
             f"{d('/impedance_estimator', 'fit_p99_ms')} ms (CPU {d('/impedance_estimator', 'fit_cpu_p50_ms')}/"
             f"{d('/impedance_estimator', 'fit_cpu_p99_ms')} ms); pipeline's own take-off to profile p50/p99 "
-            f"{d('/impedance_estimator', 'takeoff_to_profile_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_profile_p99_ms')} ms; "
+            f"{d('/impedance_estimator', 'takeoff_to_profile_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_profile_p99_ms')} ms"
+            f" (of which to the kinetics' publication {d('/inverse_dynamics', 'takeoff_to_kinetics_p50_ms')}/"
+            f"{d('/inverse_dynamics', 'takeoff_to_kinetics_p99_ms')} ms, to the estimator "
+            f"{d('/impedance_estimator', 'takeoff_to_receipt_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_receipt_p99_ms')} ms;"
+            f" analysis {d('/inverse_dynamics', 'analysis_p50_ms')}/{d('/inverse_dynamics', 'analysis_p99_ms')} ms); "
             f"load average {load:.1f} on {os.cpu_count()} cores; per stance (ms) "
             + " ".join(f"{x:.1f}" for x in lat))
 

@@ -71,7 +71,7 @@ from hop_impedance.biomech.analysis import (
     calibration_markers,
     short_window,
 )
-from hop_impedance.biomech.body_model import BodyModel
+from hop_impedance.biomech.body_model import BodyModel, body_model_from_stature
 from hop_impedance.biomech.kinematics import body_model_from_markers
 from hop_impedance.biomech.stance_detection import ContactEvent, DetectorOptions, Stance, StanceDetector
 from hop_impedance.recording import GRAVITY_M_S2, MARKER_NAMES, MarkerSeries, Subject
@@ -162,6 +162,7 @@ class StanceAnalysisStage:
         self.calibrating = model is None and subject is not None
         self.notes: list[str] = []
         self._provisional_out: Stance | None = None  # an emitted stance whose take-off is provisional
+        self._warmed = False  # the short-window analysis has run once (:meth:`_warm_up`)
 
     def push(
         self,
@@ -191,7 +192,35 @@ class StanceAnalysisStage:
                     self._last_touchdown_s = ev.time_s
         if self.calibrating:
             self._calibrate(final=False)
+        if not self._warmed and np.isfinite(self._last_touchdown_s):
+            self._warm_up()
         return self._withdrawn() + self._emit_ready(final=False)
+
+    def _warm_up(self) -> None:
+        """Run the short-window analysis once, thrown away, at the first touchdown (low-latency mode only).
+
+        The first call of the filters, splines and inverse dynamics in a process costs ~10 ms
+        more than the later ones (first use of scipy's and numpy's code paths); done here, in
+        the first stance (150-450 ms before its take-off), it is off the path from that take-off
+        to the controller. Two made-up stances laid over the data before the touchdown (a flight
+        or quiet standing: any data run the same code) and the stature's de Leva model when the
+        markers' one is not scaled yet; nothing of it is kept.
+        """
+        self._warmed = True
+        if self.post_pad_s is None or not self._marker_t or self.subject is None:
+            return
+        data = self._span(-np.inf, self._last_touchdown_s)
+        if data.marker_t_s is None or data.force_t_s.size < 2:
+            return
+        a, length = float(data.force_t_s[0]), float(data.force_t_s[-1] - data.force_t_s[0])
+        if length < WARM_UP_MIN_S:
+            return
+        fake = [Stance(a + 0.1 * length, a + 0.35 * length, True), Stance(a + 0.5 * length, a + 0.85 * length, True)]
+        model = self.model or body_model_from_stature(self.subject)
+        try:
+            analyze_short_window(data, fake, 1, model, self.body_mass_kg, self.options)
+        except (ValueError, ArithmeticError, IndexError, np.linalg.LinAlgError) as exc:  # a warm-up never stops the stream
+            self.notes.append(f"warm-up analysis skipped: {exc}")
 
     def flush(self) -> list[StanceResult]:
         """End of stream: emit every remaining stance with the data available."""
@@ -398,6 +427,10 @@ class StanceAnalysisStage:
                 sel = t >= keep_from
                 ts[:] = [t[sel]]
                 vs[:] = [v[sel]]
+
+
+#: Least data before the first touchdown (s) that :meth:`StanceAnalysisStage._warm_up` lays its two stances over.
+WARM_UP_MIN_S = 0.2
 
 
 def pending_stance(detector: StanceDetector) -> Stance | None:

@@ -361,6 +361,31 @@ class StructureSelector:
                 self.fixed = True
         return fit_structured(stance, self.options, self.structures, self._solvers), stance_fits
 
+    def warm_up(self) -> None:
+        """Fit a made-up stance once, thrown away, so the first real stance does not pay the first-call costs.
+
+        The first fit in a process (OSQP's set-up, the regressors', diagnostics' and F-tests'
+        first calls) takes several ms more than the later ones; a live estimator calls this at
+        start, before any stance. The stance obeys the seed's law at 2.2 Hz
+        (:func:`~hop_impedance.impedance.synthetic.synthetic_stance`, every joint on its time
+        base); it is fitted with the session's structures (the seed's when not chosen yet) and
+        reduced stance by stance, with workspaces of its own; nothing of this selector changes.
+        """
+        import numpy as np
+
+        from hop_impedance.biomech.analysis import JointSeries
+        from hop_impedance.impedance.synthetic import synthetic_stance
+
+        parts = [synthetic_stance(j, 2.2, rate_hz=1000.0) for j in JOINT_NAMES]
+        t = parts[0].time_s
+        angle, omega, moment = (np.column_stack([getattr(p, name) for p in parts])
+                                for name in ("angle_rad", "angular_velocity_rad_s", "moment_nm"))
+        stance = StanceResult(0, 0.0, float(t[-1]), True, None, float(t[-1]), 1500.0, 2.8, None, None, 2.2,
+                              joints=JointSeries(t, angle, omega, moment, moment * omega))
+        structures = self.structures if self.fixed else {j: given_structure(SEED_TERMS) for j in JOINT_NAMES}
+        fit_structured(stance, self.options, structures, {})
+        fit_stance_joints(stance, self.options, {})
+
 
 __all__ = [
     "SEED_TERMS", "StructureSelector", "TrialFits", "TrialStructure", "choose_structure", "default_fit_options",

@@ -129,6 +129,7 @@ class InverseDynamicsNode(Node):
         self.lost_between_stances = 0
         self.lost_after_last = 0
         self.analysis_s: list[float] = []
+        self.takeoff_to_kinetics_s: list[float] = []  # first force sample at/after take-off -> StanceKinetics out
         self.pub_stance = self.create_publisher(StanceKinetics, STANCE_KINETICS_TOPIC, history_qos())  # late joiners
         # per-frame JointKinetics go out from later timer ticks, after the StanceKinetics (common.DeferredPublisher)
         self.pub_frames = DeferredPublisher(self, JointKinetics, JOINT_KINETICS_TOPIC, result_qos(2000))
@@ -311,6 +312,8 @@ class InverseDynamicsNode(Node):
         msg.force_samples_lost_in_stance = self.sorted_force.take_lost_before(stamp_ns(msg.takeoff_stamp))
         self.lost_between_stances += msg.force_samples_lost_before
         self.pub_stance.publish(msg)
+        if msg.takeoff_received_ns:
+            self.takeoff_to_kinetics_s.append((time.time_ns() - msg.takeoff_received_ns) * 1e-9)
         self.stances_out += 1
         self.rejected += res.rejection_reason is not None
         if self.publish_frames and res.joints is not None:
@@ -336,6 +339,8 @@ class InverseDynamicsNode(Node):
         out["stances_rejected"] = self.rejected
         out["analysis_p50_ms"] = _pct(self.analysis_s, 50)
         out["analysis_p99_ms"] = _pct(self.analysis_s, 99)
+        out["takeoff_to_kinetics_p50_ms"] = _pct(self.takeoff_to_kinetics_s, 50)
+        out["takeoff_to_kinetics_p99_ms"] = _pct(self.takeoff_to_kinetics_s, 99)
         out["body_model"] = ("waiting for the subject" if self.stage is None else "calibrating" if self.stage.calibrating
                              else "ready" if self.stage.model is not None else "none (force-only)")
         out["force_duplicates_dropped"] = self.force_buf.duplicates
