@@ -51,8 +51,9 @@ is NOT the default, because the better search changes what is named: on the outs
 (Nelder-Mead 0.018, the true angle law's 0.0089), the angle law's shot gap to 0.0057, and the gate's
 p-value to 0.056 (threshold 0.05/8), so the true effect is no longer named (``hop-impedance discover`` on
 that file at commit b1e23a7, where it was the default; a scratch run with 30 evaluations and a 1 % stop:
-0.0082 vs 0.0045, p = 0.0075, still not named). With Nelder-Mead the file is named because that search stops short for the constant model: the
-gate's outcome there depends on the search's budget, which is for the lead to decide (docs/discovery.md,
+0.0082 vs 0.0045, p = 0.0075, still not named). With Nelder-Mead the file is named because that
+search stops short for the constant model: the gate's outcome there depends on the search's budget,
+which is for the lead to decide (docs/discovery.md,
 Runtime).
 """
 
