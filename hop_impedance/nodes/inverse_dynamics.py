@@ -74,6 +74,7 @@ from hop_impedance.nodes.common import (
     ReorderBuffer,
     declare,
     declare_stream_parameters,
+    percentile_ms,
     raw_wrench_subscription,
     seconds_to_ns,
     set_stamp,
@@ -337,10 +338,10 @@ class InverseDynamicsNode(Node):
         out["force_lost_sorted"] = self.sorted_force.lost
         out["stances_published"] = self.stances_out
         out["stances_rejected"] = self.rejected
-        out["analysis_p50_ms"] = _pct(self.analysis_s, 50)
-        out["analysis_p99_ms"] = _pct(self.analysis_s, 99)
-        out["takeoff_to_kinetics_p50_ms"] = _pct(self.takeoff_to_kinetics_s, 50)
-        out["takeoff_to_kinetics_p99_ms"] = _pct(self.takeoff_to_kinetics_s, 99)
+        out["analysis_p50_ms"] = percentile_ms(self.analysis_s, 50)
+        out["analysis_p99_ms"] = percentile_ms(self.analysis_s, 99)
+        out["takeoff_to_kinetics_p50_ms"] = percentile_ms(self.takeoff_to_kinetics_s, 50)
+        out["takeoff_to_kinetics_p99_ms"] = percentile_ms(self.takeoff_to_kinetics_s, 99)
         out["body_model"] = ("waiting for the subject" if self.stage is None else "calibrating" if self.stage.calibrating
                              else "ready" if self.stage.model is not None else "none (force-only)")
         out["force_duplicates_dropped"] = self.force_buf.duplicates
@@ -354,10 +355,6 @@ class InverseDynamicsNode(Node):
             return level
         lost = sum(t.lost for t in self.trackers.values()) + self.force_buf.dropped + self.marker_buf.dropped
         return (1, f"{lost} input messages lost or too late") if lost else (0, "ok")
-
-
-def _pct(values: list[float], q: float) -> float:
-    return float(np.percentile(values, q) * 1e3) if values else math.nan
 
 
 def _nan(x) -> float:
