@@ -19,6 +19,7 @@ topic                          type                                        publi
 
 from __future__ import annotations
 
+import array
 import functools
 import math
 import struct
@@ -159,6 +160,17 @@ def raw_wrench_subscription(node: Node, topic: str, callback, qos):
 def set_stamp(stamp, ns: int) -> None:
     """Write integer ns into a ``builtin_interfaces/Time`` (sec, nanosec)."""
     stamp.sec, stamp.nanosec = divmod(int(ns), 1_000_000_000)
+
+
+def float64_sequence(values) -> array.array:
+    """``values`` as the ``array.array('d')`` a ``float64[]`` message field stores.
+
+    Assigning a numpy array makes the generated setter convert and range-check it element by
+    element, and serialising it is slow too: for a stance's five arrays (~4,000 values) 0.16 ms
+    to set and 0.56 ms to serialise, against 0.01 and 0.01 ms for an ``array.array`` (measured on
+    this machine, issue 15: the stance kinetics are on the take-off-to-controller path).
+    """
+    return array.array("d", np.ascontiguousarray(values, dtype=np.float64).ravel().tobytes())
 
 
 def seconds_to_ns(t0_ns: int, t_s: float) -> int:

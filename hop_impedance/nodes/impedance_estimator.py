@@ -79,6 +79,7 @@ from hop_impedance.nodes.common import (
     SUMMARY_TOPIC,
     Diagnostics,
     declare,
+    float64_sequence,
     percentile_ms,
     stamp_ns,
 )
@@ -306,12 +307,12 @@ def profile_message(stance: StanceKinetics, joint: str, fit: JointImpedanceFit, 
     msg.rho0_rad, msg.omega0_rad_s = _f(fit.rho0), _f(fit.omega0)
     msg.moment0_nm = float(fit.moment_nm[0]) if fit.moment_nm.size else math.nan
     if fit.ok:
-        msg.time_s = np.asarray(fit.time_s, float)
-        msg.angle_rad = np.asarray(fit.angle_rad, float)
-        msg.stiffness_nm_per_rad = np.asarray(fit.stiffness, float)
-        msg.damping_nms_per_rad = np.asarray(fit.damping, float)
-        msg.moment_measured_nm = np.asarray(fit.moment_nm, float)
-        msg.moment_fit_nm = np.asarray(fit.moment_fit, float)
+        msg.time_s = float64_sequence(fit.time_s)
+        msg.angle_rad = float64_sequence(fit.angle_rad)
+        msg.stiffness_nm_per_rad = float64_sequence(fit.stiffness)
+        msg.damping_nms_per_rad = float64_sequence(fit.damping)
+        msg.moment_measured_nm = float64_sequence(fit.moment_nm)
+        msg.moment_fit_nm = float64_sequence(fit.moment_fit)
     msg.rmse_nm, msg.r_squared = float(fit.rmse), float(fit.r_squared)
     msg.sse_variable, msg.sse_constant = float(fit.sse_variable), float(fit.sse_constant)
     msg.table3_error_variable, msg.table3_error_constant = float(fit.table3_variable), float(fit.table3_constant)
@@ -326,7 +327,7 @@ def profile_message(stance: StanceKinetics, joint: str, fit: JointImpedanceFit, 
             msg.hessian_determinant = float(np.power(10.0, d.hessian_log10_determinant))
         msg.eigenvalue_ratio = float(d.hessian_eigenvalue_ratio)
         msg.vif_terms = list(d.terms)
-        msg.vif = np.asarray(d.variance_inflation_factors, float)
+        msg.vif = float64_sequence(d.variance_inflation_factors)
     return msg
 
 

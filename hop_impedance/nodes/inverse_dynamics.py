@@ -74,6 +74,7 @@ from hop_impedance.nodes.common import (
     ReorderBuffer,
     declare,
     declare_stream_parameters,
+    float64_sequence,
     percentile_ms,
     raw_wrench_subscription,
     seconds_to_ns,
@@ -379,11 +380,11 @@ def stance_message(res: StanceResult, t0_ns: int) -> StanceKinetics:
     msg.hip_excursion_m = _nan(res.hip_excursion_m)
     if res.joints is not None:
         j = res.joints
-        msg.time_s = j.time_s.astype(float)
-        msg.angle_rad = j.angle_rad.ravel().astype(float)
-        msg.angular_velocity_rad_s = j.angular_velocity_rad_s.ravel().astype(float)
-        msg.moment_nm = j.moment_nm.ravel().astype(float)
-        msg.power_w = j.power_w.ravel().astype(float)
+        msg.time_s = float64_sequence(j.time_s)
+        msg.angle_rad = float64_sequence(j.angle_rad)
+        msg.angular_velocity_rad_s = float64_sequence(j.angular_velocity_rad_s)
+        msg.moment_nm = float64_sequence(j.moment_nm)
+        msg.power_w = float64_sequence(j.power_w)
     return msg
 
 
