@@ -142,7 +142,9 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> str:
         return float(arrival[i]) if i < stamps.size else np.nan
 
     lat, before_next = [], []
-    ctrl = [(st, t) for st, t in listener.controller if st > 0]
+    # a message heard before this run's first force sample is a previous run's (a --processes estimator still
+    # shutting down on a loaded machine latches its last feed, with the same recording's stamps)
+    ctrl = [(st, t) for st, t in listener.controller if st > 0 and arrival.size and t >= arrival.min()]
     for k, (td, to) in enumerate(events):
         got = [t for st, t in ctrl if abs(st - to) < 5_000_000]
         if not got:
