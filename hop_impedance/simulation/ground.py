@@ -31,6 +31,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
+from scipy.optimize import brentq
 
 
 @dataclass(frozen=True)
@@ -103,3 +104,89 @@ def surface(name: str) -> GroundLaw:
 def lossless(law: GroundLaw) -> GroundLaw:
     """The same law without damping (for energy bookkeeping)."""
     return GroundLaw(law.name + "_lossless", law.stiffness, law.exponent, 0.0, law.damping_exponent)
+
+
+@dataclass(frozen=True)
+class PaddedGround:
+    """A compliant pad (shoe sole and the forefoot's soft tissue) in series with a surface law (issue 17).
+
+    The seed's subjects hopped in shoes ("All the jumpers were provided with the same manufacturer and type of
+    shoes", seed 000, Methods) on a force plate; our contact point is the toe tip. The pad is an elastic law
+    ``F = k_p d^n_p`` (``pad``, a :class:`GroundLaw` whose damping must be 0) carrying the same force as the
+    surface's spring ``F = k s^n`` (massless interface): the toe's penetration ``p = s + d`` is shared so that
+    both forces are equal. A stiffening pad (``n_p > 1``) makes the contact soft at small force and stiff at
+    large force, so the leg in series with it is soft early in stance and the ground force peaks more, while
+    the joint laws are unchanged.
+
+    Choice (documented, tested in test/simulation/test_sim_ground_pad.py): the surface's damper acts on the
+    rate of the whole penetration, ``c s^m p'`` with ``s`` the surface's share (``m`` the surface's damping
+    exponent, so a Hunt-Crossley surface's damping still starts from zero); the pad's own hysteresis is lumped
+    into it. Without surface damping the contact is conservative: its stored energy is the two springs' at the
+    common force, ``F s / (n + 1) + F d / (n_p + 1)``.
+    """
+
+    surface: GroundLaw
+    pad: GroundLaw
+
+    def __post_init__(self) -> None:
+        if self.pad.damping_n_s_m != 0.0:
+            raise ValueError(f"pad {self.pad.name!r}: an elastic pad needs damping 0 (the surface's damper carries "
+                             f"the contact's losses), got {self.pad.damping_n_s_m}")
+
+    @property
+    def name(self) -> str:
+        """The surface's name (the trial's surface; the pad is stated in :meth:`to_dict`)."""
+        return self.surface.name
+
+    def split_m(self, penetration_m: float) -> tuple[float, float]:
+        """Surface share ``s`` and pad compression ``d`` (m) of a penetration ``p = s + d >= 0`` (equal forces)."""
+        p = max(float(penetration_m), 0.0)
+        if p == 0.0:
+            return 0.0, 0.0
+        ks, ns, kp, npad = self.surface.stiffness, self.surface.exponent, self.pad.stiffness, self.pad.exponent
+
+        def pad_share(s: float) -> float:  # pad compression carrying the surface spring's force at share s
+            return (ks * s**ns / kp) ** (1.0 / npad)
+
+        s = brentq(lambda s: s + pad_share(s) - p, 0.0, p, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+        return s, p - s
+
+    def elastic_force_n(self, penetration_m: float) -> float:
+        """The series springs' common force (N) at a penetration (m)."""
+        s, _ = self.split_m(penetration_m)
+        return self.surface.stiffness * s**self.surface.exponent
+
+    def unclipped_force_n(self, y_m: float, ydot_m_s: float) -> float:
+        """Law value (N) as :meth:`GroundLaw.unclipped_force_n`: series springs minus the surface's damper."""
+        s, _ = self.split_m(-y_m)
+        law = self.surface
+        damping = law.damping_n_s_m * (s**law.damping_exponent if law.damping_exponent else 1.0)
+        return law.stiffness * s**law.exponent - damping * ydot_m_s
+
+    def force_n(self, y_m: float, ydot_m_s: float) -> float:
+        """Vertical force on the toe (N), never negative, zero out of contact."""
+        if y_m >= 0.0:
+            return 0.0
+        return max(self.unclipped_force_n(y_m, ydot_m_s), 0.0)
+
+    def stored_energy_j(self, y_m: np.ndarray | float) -> np.ndarray | float:
+        """Elastic energy of surface and pad at the toe's height(s) ``y`` (J)."""
+        pen = np.maximum(-np.asarray(y_m, float), 0.0)
+        out = np.zeros(pen.shape)
+        for i, p in np.ndenumerate(pen):
+            s, d = self.split_m(float(p))
+            force = self.surface.stiffness * s**self.surface.exponent
+            out[i] = force * s / (self.surface.exponent + 1.0) + force * d / (self.pad.exponent + 1.0)
+        return out if out.ndim else float(out)
+
+    def to_dict(self) -> dict:
+        """Plain parameters for the truth file: the surface's and the pad's, in series."""
+        return {**self.surface.to_dict(), "pad_in_series": self.pad.to_dict()}
+
+
+def with_pad(law: GroundLaw, pad: GroundLaw | None) -> GroundLaw | PaddedGround:
+    """``law`` with ``pad`` in series (:class:`PaddedGround`); ``pad`` None: ``law`` itself."""
+    if pad is None:
+        return law
+    base = law.surface if isinstance(law, PaddedGround) else law
+    return PaddedGround(base, pad)

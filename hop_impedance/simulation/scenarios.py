@@ -14,11 +14,11 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from hop_impedance.biomech.body_model import DE_LEVA, body_model_from_stature
-from hop_impedance.recording import Subject
+from hop_impedance.recording import GRAVITY_M_S2, Subject
 from hop_impedance.seed_tables import JOINTS as TABLE2_JOINTS
 from hop_impedance.seed_tables import TABLE2_EQ10
 from hop_impedance.simulation.dynamics import Chain, chain_from_body_model, contact_ahead_of_toe_marker
-from hop_impedance.simulation.ground import GroundLaw, surface
+from hop_impedance.simulation.ground import GroundLaw, surface, with_pad
 from hop_impedance.simulation.hopping_trial import HoppingConfig, joint_triple, touchdown_posture, touchdown_state
 from hop_impedance.simulation.impedance_laws import (
     BellActivation,
@@ -67,6 +67,20 @@ TRUNK_BALANCE = TrunkBalance(800.0, 40.0)
 #: :data:`TRUNK_BALANCE`, a moment on the trunk's absolute pitch q4, does work on the thigh that no
 #: potential returns (bench/simulator_energy_budget.py --lossless measures it per hop).
 HIP_TRUNK_SPRING_NM_RAD = 800.0
+
+
+def shoe_pad(compression_m: float = 0.010, exponent: float = 2.0, at_body_weights: float = 3.0,
+             subject: Subject = SEED_SUBJECT) -> GroundLaw:
+    """Issue 17 candidate: the shoe's forefoot sole and the plantar soft tissue as one elastic pad ``F = k d^n``.
+
+    ``k`` is chosen so that the pad compresses ``compression_m`` at ``at_body_weights`` x the subject's weight
+    (default 10 mm at 3 BW, n = 2: a stiffening sole, soft at small force; the forefoot's plantar tissue,
+    ~10 mm thick, and a shoe's forefoot midsole each compress a few millimetres under running loads). Passed as
+    ``hopping_config(pad=...)``, in series with the trial's surface
+    (:class:`~hop_impedance.simulation.ground.PaddedGround`). Not in :func:`seed_like_options`.
+    """
+    force = at_body_weights * subject.body_mass_kg * GRAVITY_M_S2
+    return GroundLaw(f"shoe_pad_{1000 * compression_m:g}mm_n{exponent:g}", force / compression_m**exponent, exponent, 0.0)
 
 
 def toe_tip_ahead_m(subject: Subject = SEED_SUBJECT) -> float:
@@ -235,6 +249,7 @@ def hopping_config(
     push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     hip_trunk_spring_nm_rad: float = 0.0,
     bell_activation_min: float | None = None, law_scale: dict | None = None,
+    pad: GroundLaw | None = None,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
@@ -250,9 +265,11 @@ def hopping_config(
     hip law): the conservative alternative to ``trunk_balance`` (default 0, none). ``bell_activation_min``
     (:data:`SEED_LIKE_BELL_MIN`; None: none): a :class:`BellActivation` from it over the passive stance; ``law_scale``
     (:data:`SEED_LIKE_LAW_SCALE`; None: Table 2): factors on Table 2's k0, k1 (:func:`law_scale_at`), in the truth.
+    ``pad`` (e.g. :data:`SHOE_PAD`; None: none): an elastic pad in series with every surface of the trial
+    (:class:`~hop_impedance.simulation.ground.PaddedGround`), stated in the truth file's surface.
     """
     chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
-    expected = surface(calibration_surface or surface_name)
+    expected = with_pad(surface(calibration_surface or surface_name), pad)
     passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0,
                         hip_trunk_spring_nm_rad, law_scale=law_scale)
     ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
@@ -265,7 +282,7 @@ def hopping_config(
         surface=expected,
         law=law,
         touchdown_rho_rad=joint_triple(touchdown_rho_rad),
-        unexpected_surface=surface(unexpected_surface) if unexpected_surface else None,
+        unexpected_surface=with_pad(surface(unexpected_surface), pad) if unexpected_surface else None,
         unexpected_hops=tuple(unexpected_hops),
         posture_sd_rad=0.01 if variability else 0.0,
         speed_sd=0.02 if variability else 0.0,
@@ -274,6 +291,6 @@ def hopping_config(
         flight=flight,
     )
     if surface_name != (calibration_surface or surface_name):
-        config = HoppingConfig(**{**config.__dict__, "unexpected_surface": surface(surface_name),
+        config = HoppingConfig(**{**config.__dict__, "unexpected_surface": with_pad(surface(surface_name), pad),
                                   "unexpected_hops": tuple(range(n_hops))})
     return chain, config

@@ -8,6 +8,7 @@ import numpy as np
 
 from hop_impedance.biomech.body_model import body_model_from_stature
 from hop_impedance.recording import Recording, Subject
+from hop_impedance.simulation.ground import GroundLaw
 from hop_impedance.simulation.hopping_trial import simulate_hopping
 from hop_impedance.simulation.impedance_laws import TrunkBalance
 from hop_impedance.simulation.scenarios import (
@@ -27,7 +28,7 @@ def simulate_recording(
     tuned_for: str | None = None, unexpected_surface: str | None = None, unexpected_hops: tuple[int, ...] = (),
     variability: bool = True, generator: dict | None = None, trunk_balance: TrunkBalance | None = None,
     flight: str = "prescribed", contact_ahead_m: float = 0.0, push_timing: tuple[float, float] = PUSH_OFF_TIMING,
-    bell_activation_min: float | None = None, law_scale: dict | None = None,
+    bell_activation_min: float | None = None, law_scale: dict | None = None, pad: GroundLaw | None = None,
 ) -> tuple[Recording, dict]:
     """Simulate a hopping trial and sample it as a contract recording.
 
@@ -61,7 +62,7 @@ def simulate_recording(
     trunk_balance, flight, contact_ahead_m, push_timing, bell_activation_min :
         Trunk-balance moment at the hip, flight model, ground contact ahead of the toe marker (m) and
         push-off onset/duration as fractions of the passive stance (:func:`hopping_config`; defaults:
-        none, prescribed, 0 = at the marker, :data:`PUSH_OFF_TIMING`); ``bell_activation_min``, ``law_scale`` too.
+        none, prescribed, 0 = at the marker, :data:`PUSH_OFF_TIMING`); ``bell_activation_min``, ``law_scale``, ``pad`` too.
         :func:`seed_like_options` bundles issue 17's candidate.
 
     Returns
@@ -74,7 +75,7 @@ def simulate_recording(
         freq_hz, surface_name, n_hops, effects, subject=subject, touchdown_rho_rad=touchdown_rho_rad,
         unexpected_surface=unexpected_surface, unexpected_hops=unexpected_hops, calibration_surface=tuned_for,
         variability=variability, trunk_balance=trunk_balance, flight=flight, contact_ahead_m=contact_ahead_m,
-        push_timing=push_timing, bell_activation_min=bell_activation_min, law_scale=law_scale)
+        push_timing=push_timing, bell_activation_min=bell_activation_min, law_scale=law_scale, pad=pad)
     trial = simulate_hopping(chain, config, seed=seed)
     recording, sensor_truth = sample_recording(trial, sensors, subject, np.random.default_rng([seed, 1]))
     gen = {"seed": seed, "freq_hz": freq_hz, "surface": surface_name, "n_hops": n_hops,

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hop_impedance.simulation.ground import HARD, SOFT
+from hop_impedance.simulation.ground import HARD, SOFT, PaddedGround, with_pad
 from hop_impedance.simulation.hopping_trial import (
     calibrate,
     leg_stiffness_n_per_m,
@@ -82,7 +82,8 @@ def unexpected_hard_vs_soft(freq_hz: float = 2.2, effects: Effects = Effects(), 
         raise ValueError(f"{freq_hz} Hz: no calibrated hop on the soft surface")
     law = scale_push_off(cfg.law, cal.push_scale)
     td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
-    soft, hard = (simulate_stance(chain, law, ground, td, friction_coefficient=cfg.friction_coefficient,
+    pad = cfg.surface.pad if isinstance(cfg.surface, PaddedGround) else None  # a shoe pad stays on both surfaces
+    soft, hard = (simulate_stance(chain, law, with_pad(ground, pad), td, friction_coefficient=cfg.friction_coefficient,
                                   trunk_balance=cfg.trunk_balance) for ground in (SOFT, HARD))
 
     def flexion(st: StanceSimulation) -> np.ndarray:
