@@ -35,6 +35,7 @@ from hop_impedance.nodes.common import (
     PROGRESS_TOPIC,
     STANCE_KINETICS_TOPIC,
     SUMMARY_TOPIC,
+    freeze_startup_objects,
     stamp_ns,
     warm_up_logging,
 )
@@ -307,6 +308,7 @@ def _run_in_process(cfg: PipelineConfig) -> PipelineReport:
         nodes.append(replay)
         executor.add_node(replay)
         warm_up_logging()  # else the first log call in a callback costs tens of ms (the first stance's latency)
+        freeze_startup_objects()  # no full collection of the start-up objects on a stance's path
         _spin_until_done(executor, collector, cfg, t0)
         _wait_for_bridge(executor, nodes, len(collector.report.summaries))
         replay.stop()
