@@ -4,6 +4,10 @@ Usage::
 
     nice -n 10 .venv/bin/python bench/simulator_issue17_search.py                       # a_min 0.85,0.9,0.8,1
     nice -n 10 .venv/bin/python bench/simulator_issue17_search.py --a-min 0.85 --iterations 10
+    nice -n 19 .venv/bin/python bench/simulator_issue17_search.py --a-min 0.9 --surface rigid --pad 10,2
+
+``--surface`` and ``--pad MM,N`` (session 11): the trials' surface and a shoe pad in series (``scenarios.shoe_pad``,
+MM mm at 3 body weights, exponent N), for the calibration and the criteria alike.
 
 For each a_min (``seed_like_options()`` with ``bell_activation_min`` = a_min; 1 = no bell), one rule at every
 frequency: ``fit_calibration.calibrate_law_scale`` steps the ankle's and knee's factors on Table 2's k0 and k1
@@ -28,31 +32,35 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simulator_issue17 import FORBIDDEN_OUT, criteria, realism_rows  # noqa: E402  (a bench next to this one)
 
 from hop_impedance.simulation.fit_calibration import calibrate_law_scale, table2_k, worst_deviation  # noqa: E402
-from hop_impedance.simulation.scenarios import seed_like_options  # noqa: E402
+from hop_impedance.simulation.scenarios import seed_like_options, shoe_pad  # noqa: E402
 
 FREQS = (1.53, 1.87, 2.2)
 
 
-def options_for(a_min: float) -> dict:
-    """seed_like_options with the bell's floor a_min (1: no bell)."""
-    return {**seed_like_options(), "bell_activation_min": None if a_min >= 1.0 else a_min}
+def options_for(a_min: float, pad: str | None = None) -> dict:
+    """seed_like_options with the bell's floor a_min (1: no bell) and a shoe pad ``"MM,N"`` (None: none)."""
+    options = {**seed_like_options(), "bell_activation_min": None if a_min >= 1.0 else a_min}
+    if pad:
+        mm, exponent = (float(v) for v in pad.split(","))
+        options["pad"] = shoe_pad(mm / 1000.0, exponent)
+    return options
 
 
-def search_one(a_min: float, iterations: int, tolerance: float) -> dict:
+def search_one(a_min: float, iterations: int, tolerance: float, surface: str = "hard", pad: str | None = None) -> dict:
     """Calibrate the law at every frequency for this a_min, then measure issue 17's criteria with it."""
-    options = options_for(a_min)
+    options = options_for(a_min, pad)
     scales, calibration_dev, notes = {}, {}, []
     for f in FREQS:
         t0 = time.perf_counter()
         errors: list[str] = []
-        cal = calibrate_law_scale(f, options, iterations=iterations, tolerance=tolerance,
+        cal = calibrate_law_scale(f, options, iterations=iterations, tolerance=tolerance, surface=surface,
                                   on_step=lambda _scale, _fitted, error, sink=errors: sink.append(error) if error else None)
         scales[f] = np.round(cal.scale, 6)
         calibration_dev[f] = worst_deviation(cal.fitted, table2_k(f))
         failed = len(errors)
         notes.append(f"{f:g} Hz: {len(cal.history)} fitted steps, {failed} trials without a hop, best worst deviation "
                      f"{calibration_dev[f]:.1%} ({time.perf_counter() - t0:.0f} s)")
-    rows, measures = criteria({**options, "law_scale": scales})
+    rows, measures = criteria({**options, "law_scale": scales}, surface=surface)
     _, out = realism_rows(measures)
     fit_dev = {f: worst_deviation(m.fitted, table2_k(f)) for f, m in measures.items()}
     return {"a_min": a_min, "scales": scales, "calibration_dev": calibration_dev, "fit_dev": fit_dev, "out": out,
@@ -72,6 +80,8 @@ def main() -> None:
     parser.add_argument("--a-min", default="0.85,0.9,0.8,1", help="bell floors to try (1: no bell)")
     parser.add_argument("--iterations", type=int, default=8)
     parser.add_argument("--tolerance", type=float, default=0.1)
+    parser.add_argument("--surface", choices=("hard", "rigid", "soft"), default="hard", help="the trials' surface")
+    parser.add_argument("--pad", metavar="MM,N", help="a shoe pad in series: MM mm at 3 body weights, exponent N")
     args = parser.parse_args()
     header = ("| a_min | calibration: worst ankle/knee fit deviation at 1.53 / 1.87 / 2.2 Hz (%, 6 hops) | the same in "
               "the 10-hop criteria trials (%) | worst (%) | binding Table 1 cells out | which | issue 17 rows passed |\n"
@@ -79,7 +89,7 @@ def main() -> None:
     results = []
     for a_min in (float(v) for v in args.a_min.split(",")):
         t0 = time.perf_counter()
-        r = search_one(a_min, args.iterations, args.tolerance)
+        r = search_one(a_min, args.iterations, args.tolerance, args.surface, args.pad)
         results.append(r)
         print(f"a_min {a_min:g} ({time.perf_counter() - t0:.0f} s):")
         for n in r["notes"]:

@@ -117,13 +117,14 @@ def next_scale(history: list[tuple[np.ndarray, np.ndarray]], target: np.ndarray,
 
 
 def calibrate_law_scale(freq_hz: float, options: dict, *, start=None, n_hops: int = 6, seed: int = 1,
-                        iterations: int = 6, tolerance: float = 0.05, on_step=None) -> Calibration:
+                        iterations: int = 6, tolerance: float = 0.05, on_step=None,
+                        surface: str = "hard") -> Calibration:
     """Step the ankle's and knee's scale (:func:`next_scale`) until every fitted k0, k1 is within ``tolerance``.
 
     ``options`` are :func:`~hop_impedance.simulation.simulate.simulate_recording`'s keyword options (e.g.
     :func:`~hop_impedance.simulation.scenarios.seed_like_options` without ``law_scale``); ``start`` the
-    first scale (2, 3) (default ones: Table 2). Each step simulates a noise-free ``n_hops`` trial on the hard
-    surface with the scaled law and fits it (:func:`fitted_k0_k1`); a law with which the trial fails (no
+    first scale (2, 3) (default ones: Table 2). Each step simulates a noise-free ``n_hops`` trial on ``surface``
+    (default seed 001's hard surface) with the scaled law and fits it (:func:`fitted_k0_k1`); a law with which the trial fails (no
     periodic hop) is replaced by the geometric mean of it and the last measured scale. Stops when the worst
     ankle/knee deviation is within ``tolerance`` or after ``iterations`` trials, and returns the measured step
     with the smallest worst deviation (the caller checks :meth:`Calibration.deviation`). ``on_step(scale,
@@ -137,7 +138,7 @@ def calibrate_law_scale(freq_hz: float, options: dict, *, start=None, n_hops: in
     history: list[tuple[np.ndarray, np.ndarray]] = []
     for _ in range(max(1, iterations)):
         try:
-            rec, _truth = simulate_recording(freq_hz, "hard", n_hops, seed=seed, sensors=noise_free(SensorConfig()),
+            rec, _truth = simulate_recording(freq_hz, surface, n_hops, seed=seed, sensors=noise_free(SensorConfig()),
                                              effects=Effects(), law_scale={freq_hz: scale.copy()}, **options)
             fitted = fitted_k0_k1(rec)
         except ValueError as exc:  # no periodic hop with this law (e.g. "take-off too weak"): half the step back
