@@ -395,6 +395,16 @@ class ConstrainedLeastSquares:
             x = x_new
         return self.solve_all_rows(design, target, constraints)
 
+    def prepare(self, p: int) -> None:
+        """Set up the working-set workspace for ``p`` unknowns now instead of at the first violated constraint.
+
+        OSQP's set-up is most of a process's first constrained fit's extra cost (a live
+        estimator's first stance, issue 15); a stance whose unconstrained optimum is
+        feasible never reaches it, so a warm-up fit alone does not pay it.
+        """
+        if self.working_set:
+            self._small_solver(p)
+
     def _small_solver(self, p: int) -> osqp.OSQP:
         """OSQP workspace for p unknowns and ``max_working_rows`` rows (dense pattern), cached per p."""
         solver = self._small.get(p)

@@ -51,7 +51,7 @@ from typing import Any
 from hop_impedance.biomech.analysis import AnalysisOptions, RecordingAnalysis, StanceResult
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares
-from hop_impedance.impedance.regression_model import STIFFNESS_TERMS, TERM_NAMES
+from hop_impedance.impedance.regression_model import STIFFNESS_TERMS, TERM_NAMES, parameter_indices
 from hop_impedance.impedance.stance_fit import FitOptions, JointImpedanceFit, fit_joint_stance
 
 
@@ -260,6 +260,11 @@ def fit_recording_trial(
     return TrialFits(fits, stance_fits, chosen)
 
 
+def solver_key(joint: str, structure: TrialStructure) -> str:
+    """Key of a joint's OSQP workspace for one structure in a ``solvers`` dict of :func:`fit_structured`."""
+    return f"{joint} {' '.join(structure.terms)}"
+
+
 def fit_structured(
     stance: StanceResult,
     options: FitOptions,
@@ -271,8 +276,7 @@ def fit_structured(
     for joint in JOINT_NAMES:
         sub = None
         if solvers is not None:  # one workspace per joint and structure, shared by the trial's stances
-            key = f"{joint} {' '.join(structures[joint].terms)}"
-            sub = {joint: solvers.setdefault(key, ConstrainedLeastSquares(eps=options.osqp_eps))}
+            sub = {joint: solvers.setdefault(solver_key(joint, structures[joint]), ConstrainedLeastSquares(eps=options.osqp_eps))}
         out[joint] = _fit_one_joint(stance, joint, structured_options(options, structures[joint]), sub)
     return out
 
@@ -369,7 +373,7 @@ class StructureSelector:
         start, before any stance. The stance obeys the seed's law at 2.2 Hz
         (:func:`~hop_impedance.impedance.synthetic.synthetic_stance`, every joint on its time
         base); it is fitted with the session's structures (the seed's when not chosen yet) and
-        reduced stance by stance, with workspaces of its own; nothing of this selector changes.
+        reduced stance by stance; of this selector only the OSQP workspaces are set up.
         """
         import numpy as np
 
@@ -383,7 +387,11 @@ class StructureSelector:
         stance = StanceResult(0, 0.0, float(t[-1]), True, None, float(t[-1]), 1500.0, 2.8, None, None, 2.2,
                               joints=JointSeries(t, angle, omega, moment, moment * omega))
         structures = self.structures if self.fixed else {j: given_structure(SEED_TERMS) for j in JOINT_NAMES}
-        fit_structured(stance, self.options, structures, {})
+        # the selector's own workspaces: their OSQP set-up is most of the first fit's extra cost; every solve
+        # sets its data and warm start anew, so the made-up stance leaves no trace in later results
+        fit_structured(stance, self.options, structures, self._solvers)
+        for j, structure in structures.items():
+            self._solvers[solver_key(j, structure)].prepare(len(parameter_indices(structure.terms)))
         fit_stance_joints(stance, self.options, {})
 
 

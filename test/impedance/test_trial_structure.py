@@ -118,3 +118,23 @@ def test_live_selector_fixes_the_structure_after_warmup():
     assert "fixed after 3 stances" in selector.structures["knee"].reason
     # three stances are a small sample: the ankle keeps k2 (2 of 3), which the whole trial drops (3 of 8)
     assert first3["knee"] == offline.structures["knee"].terms == ("k0", "k1")
+
+
+def test_warm_up_leaves_no_trace_in_the_fits():
+    """The live estimator's warm-up (a made-up stance fitted in the selector's own OSQP workspaces) changes no
+    later coefficient: every fit equals the one of a selector that was not warmed up."""
+    analysis = _foreign("angle_dependent_stiffness_1201")
+    given = {j: SEED_TERMS for j in JOINTS}
+    cold, warm = (StructureSelector(default_fit_options(analysis.options), given) for _ in range(2))
+    warm.warm_up()
+    assert set(warm._solvers) == {f"{j} k0 k1 b0" for j in JOINTS}  # the workspaces the stances use were set up
+    compared = 0
+    for stance in analysis.stances:
+        a, b = cold.fit(stance)[0], warm.fit(stance)[0]
+        for j in JOINTS:
+            assert a[j].ok == b[j].ok
+            if a[j].ok:
+                for term in SEED_TERMS:
+                    assert b[j].coefficients[term] == pytest.approx(a[j].coefficients[term], rel=1e-9, abs=1e-9)
+                compared += 1
+    assert compared >= 18
