@@ -115,40 +115,35 @@ class Listener:
 
 
 class GcPauses:
-    """Garbage-collector pauses of this process (the one-process pipeline's) from the replay's start on."""
+    """Garbage-collector pauses of this process (the one-process pipeline's) while the replay plays."""
 
     def __init__(self) -> None:
         import gc
 
-        self.pauses: list[tuple[int, float]] = []
+        self.pauses: list[tuple[int, float, float]] = []  # (generation, ms, monotonic s at its end)
         self._start = 0.0
-        self._on = False
         self._callback = self._record
         gc.callbacks.append(self._callback)
 
     def _record(self, phase: str, info: dict) -> None:
         if phase == "start":
             self._start = time.perf_counter()
-        elif self._on:
-            self.pauses.append((info["generation"], 1e3 * (time.perf_counter() - self._start)))
-
-    def ready(self, listener):
-        """The runner's ready_to_play: the listener matched the feed; pauses count from then on."""
-        def check() -> bool:
-            self._on = listener.controller_sub.get_publisher_count() > 0
-            return self._on
-        return check
+        else:
+            self.pauses.append((info["generation"], 1e3 * (time.perf_counter() - self._start), time.monotonic()))
 
     def stop(self) -> None:
         import gc
 
         gc.callbacks.remove(self._callback)
 
-    def line(self) -> str:
-        if not self.pauses:
+    def line(self, since: float) -> str:
+        """Pauses that ended after ``since`` (monotonic s: the first force sample heard; the runner's own
+        start-up collection, ``freeze_startup_objects``, comes before)."""
+        pauses = [p for p in self.pauses if p[2] >= since]
+        if not pauses:
             return "no garbage collection in this process during the replay"
-        longest = max(self.pauses, key=lambda p: p[1])
-        return (f"{len(self.pauses)} garbage collections in this process during the replay, longest {longest[1]:.2f} ms "
+        longest = max(pauses, key=lambda p: p[1])
+        return (f"{len(pauses)} garbage collections in this process during the replay, longest {longest[1]:.2f} ms "
                 f"(generation {longest[0]})")
 
 
@@ -169,7 +164,7 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> str:
     try:
         time.sleep(1.0)  # discovery of the listener before the replay starts
         # the replay starts once the listener hears the controller feed's publisher, so no stance is missed
-        report, cpu, wall = run(rec, rate=1.0, ready_to_play=gc_pauses.ready(listener), **kw)
+        report, cpu, wall = run(rec, rate=1.0, ready_to_play=lambda: listener.controller_sub.get_publisher_count() > 0, **kw)
         time.sleep(1.5)  # the listener's thread may lag behind on a loaded machine
     finally:
         listener.close()
@@ -212,7 +207,7 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> str:
             f"{d('/inverse_dynamics', 'takeoff_to_kinetics_p99_ms')} ms, to the estimator "
             f"{d('/impedance_estimator', 'takeoff_to_receipt_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_receipt_p99_ms')} ms;"
             f" analysis {d('/inverse_dynamics', 'analysis_p50_ms')}/{d('/inverse_dynamics', 'analysis_p99_ms')} ms); "
-            f"load average {load:.1f} on {os.cpu_count()} cores; {gc_pauses.line()}; per stance (ms) "
+            f"load average {load:.1f} on {os.cpu_count()} cores; {gc_pauses.line(arrival.min() if arrival.size else 0.0)}; per stance (ms) "
             + " ".join(f"{x:.1f}" for x in lat))
 
 
