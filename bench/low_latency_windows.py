@@ -12,6 +12,9 @@ default) that moved by more than 2 percentage points: issue 15 requires none.
     nice -n 10 .venv/bin/python bench/low_latency_windows.py 0.005
     nice -n 10 .venv/bin/python bench/low_latency_windows.py 0.005 0.01 0.05 --frequencies 2.2
 
+``--noise-repeat`` adds the batch analysis of the same simulated trials sampled with another sensor-noise
+draw: how far the noisy cells move from the noise alone, the resolution of a 2 pp bound on them.
+
 Besides the cells moved, it counts the cells whose |median error| grew by more than 2 pp (a move
 towards zero is not a loss of accuracy).
 
@@ -44,6 +47,8 @@ import hop_impedance.biomech.analysis as analysis
 import hop_impedance.validation.coefficient_recovery as coefficient_recovery
 from hop_impedance.validation.coefficient_recovery import JOINTS, recover_pooled
 
+#: The key of the batch analysis with another sensor-noise draw (``--noise-repeat``) among the PADs.
+NOISE_REPEAT = -1.0
 #: A cell "moves" when its median error changes by more than this (percentage points; issue 15).
 BOUND_PP = 2.0
 
@@ -77,7 +82,7 @@ def stance_cost(pad: float, repeats: int = 5) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("pads", type=float, nargs="+", metavar="PAD", help="window end after take-off (s)")
+    parser.add_argument("pads", type=float, nargs="*", metavar="PAD", help="window end after take-off (s)")
     parser.add_argument("--frequencies", type=float, nargs="+", default=[1.53, 1.87, 2.20])
     parser.add_argument("--seeds", type=int, nargs="+", default=[11, 12, 13, 14])
     parser.add_argument("--hops", type=int, default=4)
@@ -91,6 +96,9 @@ def main() -> None:
                         help="anchor the previous hop's post-take-off motion to the last FRAMES frames (0: straight line only)")
     parser.add_argument("--exclude-takeoff", type=float, default=0.0, metavar="E",
                         help="short windows only: leave the last E s before take-off out of the fit's objective")
+    parser.add_argument("--noise-repeat", action="store_true",
+                        help="also the batch analysis of the same trials with another sensor-noise draw: the cells' "
+                             "repeatability, against which a 2 pp move of a noisy cell is read")
     parser.add_argument("--stance-cost", action="store_true",
                         help="only time one stance's short-window analysis (straight line vs template) and stop")
     args = parser.parse_args()
@@ -120,7 +128,9 @@ def main() -> None:
     batch_fit_options = coefficient_recovery.law_fit_options
     cells: dict[float | None, dict] = {}
     with tempfile.TemporaryDirectory() as folder:
-        for pad in [None] + args.pads:
+        for pad in [None] + args.pads + ([NOISE_REPEAT] if args.noise_repeat else []):
+            draw = 2 if pad == NOISE_REPEAT else 1
+            pad = None if pad == NOISE_REPEAT else pad
             # recover_trial imports analyze_recording from the module at call time: it gets this one
             analysis.analyze_recording = (batch_analyze if pad is None else
                                           lambda rec, options=None, pad=pad: batch_analyze(
@@ -128,13 +138,15 @@ def main() -> None:
             coefficient_recovery.law_fit_options = (batch_fit_options if pad is None or not args.exclude_takeoff else
                                                     lambda o, e: replace(batch_fit_options(o, e),
                                                                          exclude_takeoff_s=args.exclude_takeoff))
-            print("batch analysis (whole record)" if pad is None else
+            print(("batch analysis (whole record)" + (", sensor noise draw 2" if draw == 2 else "")) if pad is None else
                   f"short windows: post_takeoff_s = {pad * 1e3:g} ms after take-off", flush=True)
-            cells[pad] = {}
+            key = NOISE_REPEAT if draw == 2 else pad
+            cells[key] = {}
             for freq in args.frequencies:
-                results = recover_pooled(freq, args.seeds, Path(folder), cutoff_hz=cutoffs, n_hops=args.hops)
+                results = recover_pooled(freq, args.seeds, Path(folder), cutoff_hz=cutoffs, n_hops=args.hops,
+                                         noise_stream=draw)
                 print_table(freq, results)
-                cells[pad].update({(freq,) + key: value for key, value in medians(results).items()})
+                cells[key].update({(freq,) + key: value for key, value in medians(results).items()})
     analysis.analyze_recording = batch_analyze
     batch = cells.pop(None)
     print(f"\ncells moved by more than {BOUND_PP:g} pp against batch (median errors, %):")
@@ -146,7 +158,8 @@ def main() -> None:
                 worse += abs(s) - abs(b) > BOUND_PP
                 if abs(s - b) > BOUND_PP:
                     moved.append(f"  {key[0]:4.2f} Hz {key[1]:5s} {key[2]:5s} {name}: {b:+6.1f} -> {s:+6.1f} ({s - b:+.1f} pp)")
-        print(f"PAD {pad * 1e3:g} ms: {len(moved)} of {2 * len(table)} cells moved; "
+        name = "batch, noise draw 2" if pad == NOISE_REPEAT else f"PAD {pad * 1e3:g} ms"
+        print(f"{name}: {len(moved)} of {2 * len(table)} cells moved; "
               f"largest move clean {largest['clean']:.1f} pp, noisy {largest['noisy']:.1f} pp; "
               f"{worse} cells' |error| grew by more than {BOUND_PP:g} pp")
         print("\n".join(moved))

@@ -116,6 +116,7 @@ def recover_trial(
     edge_s: float = 0.0,
     skip_first: int = 0,
     trial=None,
+    noise_stream: int = 1,
 ) -> RecoveryResult:
     """Simulate (or reuse ``trial``), record, analyse and fit one trial; k0/k1 errors per stance.
 
@@ -141,6 +142,9 @@ def recover_trial(
     trial : HoppingTrial, optional
         An already simulated trial of ``freq_hz`` and ``seed`` (saves the simulation
         when the same trial is recorded twice).
+    noise_stream : int
+        The sensor noise draw, ``[seed, noise_stream]``: another value samples the same trial
+        with other noise (how far the noisy medians move from the noise draw alone).
     """
     from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording
     from hop_impedance.impedance.recording_fits import fit_recording
@@ -149,7 +153,7 @@ def recover_trial(
 
     if trial is None:
         trial = simulate_law_trial(freq_hz, seed, n_hops)
-    rec, truth = record_law_trial(trial, noisy, np.random.default_rng([seed, 1]))
+    rec, truth = record_law_trial(trial, noisy, np.random.default_rng([seed, noise_stream]))
     path = Path(folder) / f"recovery_{freq_hz:.2f}hz_seed{seed}_{'noisy' if noisy else 'clean'}.mcap"
     write_simulated_recording(path, rec, truth)
     analysis = analyze_recording(load_recording(path), AnalysisOptions(marker_cutoff_hz=cutoff_hz, force_cutoff_hz=cutoff_hz))
@@ -231,12 +235,13 @@ def recover_pooled(
     n_hops: int = 4,
     edge_s: float = 0.0,
     skip_first: int = 0,
+    noise_stream: int = 1,
 ) -> dict[str, RecoveryResult]:
     """Every seed's trial at one frequency, recorded noise-free and noisy, recovered and pooled.
 
     Each trial is simulated once and sampled twice. ``cutoff_hz`` maps
     ``"clean"`` and ``"noisy"`` to the analysis cut-off (Hz) of that
-    recording; the other arguments as in :func:`recover_trial`.
+    recording; the other arguments (``noise_stream``: the noise draw) as in :func:`recover_trial`.
 
     Returns
     -------
@@ -247,5 +252,6 @@ def recover_pooled(
         trial = simulate_law_trial(freq_hz, seed, n_hops)
         for label, result in out.items():
             result.extend(recover_trial(freq_hz, seed, label == "noisy", folder, n_hops=n_hops, cutoff_hz=cutoff_hz[label],
-                                        edge_s=edge_s, skip_first=skip_first, trial=trial))
+                                        edge_s=edge_s, skip_first=skip_first, trial=trial,
+                                        noise_stream=noise_stream))
     return out
