@@ -185,6 +185,10 @@ class StanceResult:
     push_work_j: np.ndarray | None = None
     overall_stiffness_nm_per_rad: np.ndarray | None = None
     hip_residual_rms_nm: float = float("nan")
+    #: How far past the take-off the data of this stance's analysis reached (s): ``post_takeoff_s`` of a
+    #: short window (:func:`analyze_short_window`, the low-latency stage), None for the whole record.
+    #: The fit leaves samples out near take-off when it is short (``stance_fit.takeoff_exclusion_s``).
+    data_after_takeoff_s: float | None = None
 
 
 @dataclass
@@ -595,6 +599,7 @@ def analyze_short_window(
     extended = extend_past_window(span, stances, k, options)
     result = analyze_span(extended, stances[: k + 1], [k], model, body_mass_kg, options)[0]
     result.flight_before_s, result.flight_after_s, result.hop_frequency_hz = stance_timing(stances, k)
+    result.data_after_takeoff_s = _post_takeoff_s(options)
     return result, span
 
 

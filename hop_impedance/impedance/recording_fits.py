@@ -85,6 +85,31 @@ def _stance_reason(stance: StanceResult) -> str | None:
     return None
 
 
+#: A stance analysed on data reaching less than this past its take-off (s) is a short window
+#: (``StanceResult.data_after_takeoff_s``, the low-latency mode): :func:`takeoff_exclusion_s` applies.
+SHORT_WINDOW_LIMIT_S = 0.02
+#: What a short window's hip fit leaves out before take-off (s): two frames of 100 Hz markers.
+SHORT_WINDOW_HIP_EXCLUSION_S = 0.02
+
+
+def takeoff_exclusion_s(joint: str, stance: StanceResult, options: FitOptions) -> float:
+    """Time before take-off left out of ``joint``'s fit objective (s): ``options.exclude_takeoff_s``, or more.
+
+    Choice (issue 15, docs/pipeline.md "Short windows offline and live"): when the stance was
+    analysed on a short window (data ending less than :data:`SHORT_WINDOW_LIMIT_S` after
+    take-off), the hip's last :data:`SHORT_WINDOW_HIP_EXCLUSION_S` are left out. Near take-off
+    the ground force vanishes and the hip's net moment is mostly the inertia of the segments
+    below it, whose accelerations there depend on marker frames after the take-off that a short
+    window does not have yet (they are continued, ``analysis.extend_past_window``); the ankle's
+    moment there is the force plate's, known at 1 kHz. Measured on the recovery trials
+    (``bench/low_latency_windows.py 0.005``): without it, the clean hip cells moved up to 15.6 pp.
+    """
+    after = stance.data_after_takeoff_s
+    if joint == "hip" and after is not None and after < SHORT_WINDOW_LIMIT_S:
+        return max(options.exclude_takeoff_s, SHORT_WINDOW_HIP_EXCLUSION_S)
+    return options.exclude_takeoff_s
+
+
 def fit_stance_joints(
     stance: StanceResult,
     options: FitOptions | None = None,
@@ -130,8 +155,10 @@ def fit_stance_joints(
         solver = None
         if solvers is not None:
             solver = solvers.setdefault(name, ConstrainedLeastSquares(eps=options.osqp_eps))
+        excluded = takeoff_exclusion_s(name, stance, options)
+        joint_options = options if excluded == options.exclude_takeoff_s else replace(options, exclude_takeoff_s=excluded)
         fits[name] = fit_joint_stance(
-            data["time_s"], data["angle_rad"], data["angular_velocity_rad_s"], data["moment_nm"], options, solver
+            data["time_s"], data["angle_rad"], data["angular_velocity_rad_s"], data["moment_nm"], joint_options, solver
         )
     return fits
 
@@ -398,4 +425,5 @@ class StructureSelector:
 __all__ = [
     "SEED_TERMS", "StructureSelector", "TrialFits", "TrialStructure", "choose_structure", "default_fit_options",
     "fit_recording", "fit_recording_trial", "fit_stance_joints", "fit_structured", "given_structure", "noise_bandwidth_hz",
+    "takeoff_exclusion_s",
 ]

@@ -378,6 +378,7 @@ def stance_message(res: StanceResult, t0_ns: int) -> StanceKinetics:
     msg.hop_frequency_hz = _nan(res.hop_frequency_hz)
     msg.leg_stiffness_n_per_m = _nan(res.leg_stiffness_n_per_m)
     msg.hip_excursion_m = _nan(res.hip_excursion_m)
+    msg.data_after_takeoff_s = float(res.data_after_takeoff_s or 0.0)  # 0: whole record (short windows are > 0)
     if res.joints is not None:
         j = res.joints
         msg.time_s = float64_sequence(j.time_s)
@@ -399,6 +400,7 @@ def stance_from_message(msg: StanceKinetics) -> StanceResult:
         None if math.isnan(msg.flight_time_before_s) else msg.flight_time_before_s, None,
         None if math.isnan(msg.hop_frequency_hz) else msg.hop_frequency_hz,
         leg_stiffness_n_per_m=msg.leg_stiffness_n_per_m, hip_excursion_m=msg.hip_excursion_m,
+        data_after_takeoff_s=msg.data_after_takeoff_s if msg.data_after_takeoff_s > 0 else None,
     )
     n = len(msg.time_s)
     if n:

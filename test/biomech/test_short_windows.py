@@ -38,7 +38,7 @@ from hop_impedance.biomech import analysis
 from hop_impedance.biomech.analysis import AnalysisOptions, SpanData, analyze_recording, recording_span
 from hop_impedance.biomech.stages import WITHDRAWN, StanceAnalysisStage
 from hop_impedance.biomech.stance_detection import Stance
-from hop_impedance.impedance.recording_fits import default_fit_options, fit_stance_joints
+from hop_impedance.impedance.recording_fits import SHORT_WINDOW_HIP_EXCLUSION_S, default_fit_options, fit_stance_joints
 from hop_impedance.io.recording_io import load_recording
 
 RECORDING = Path(__file__).resolve().parents[2] / "recordings" / "sim_2p20hz_hard.mcap"
@@ -65,6 +65,7 @@ def test_live_stage_equals_offline_short_windows(recording):
     analysed = 0
     for a, b in zip(offline.stances, live):
         assert a.rejection_reason == b.rejection_reason
+        assert a.data_after_takeoff_s == b.data_after_takeoff_s == PAD_S  # what the fit's take-off rule reads
         if a.joints is None:
             continue
         for name in ("angle_rad", "angular_velocity_rad_s", "moment_nm"):
@@ -74,6 +75,30 @@ def test_live_stage_equals_offline_short_windows(recording):
             assert fa[joint].coefficients == fb[joint].coefficients, (a.index, joint)
         analysed += 1
     assert analysed >= 8
+
+
+@needs_recording
+def test_short_window_hip_fit_leaves_the_takeoff_out(recording):
+    """``recording_fits.takeoff_exclusion_s``: a short window's hip fit is the fit without its last 20 ms (and
+    differs from the fit with them); its ankle and knee, and every joint of a whole-record stance, use every sample."""
+    short = analyze_recording(recording, AnalysisOptions(post_takeoff_s=PAD_S))
+    whole = analyze_recording(recording)
+    options = default_fit_options(short.options)
+    cut = replace(options, exclude_takeoff_s=SHORT_WINDOW_HIP_EXCLUSION_S)
+    compared = 0
+    for s, w in zip(short.stances, whole.stances):
+        if s.joints is None or w.joints is None:
+            continue
+        assert w.data_after_takeoff_s is None
+        fits, whole_fits = fit_stance_joints(s, options), fit_stance_joints(w, options)
+        assert fits["hip"].coefficients == fit_stance_joints(s, cut, joints=("hip",))["hip"].coefficients
+        with_takeoff = fit_stance_joints(replace(s, data_after_takeoff_s=None), options)
+        assert fits["hip"].coefficients["k0"] != pytest.approx(with_takeoff["hip"].coefficients["k0"], rel=1e-6)
+        for joint in ("ankle", "knee"):
+            assert fits[joint].coefficients == with_takeoff[joint].coefficients
+        assert whole_fits["hip"].coefficients != fit_stance_joints(w, cut, joints=("hip",))["hip"].coefficients
+        compared += 1
+    assert compared >= 8
 
 
 def _moment_errors(recording, treated: bool) -> np.ndarray:
