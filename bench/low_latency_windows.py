@@ -12,6 +12,9 @@ default) that moved by more than 2 percentage points: issue 15 requires none.
     nice -n 10 .venv/bin/python bench/low_latency_windows.py 0.005
     nice -n 10 .venv/bin/python bench/low_latency_windows.py 0.005 0.01 0.05 --frequencies 2.2
 
+``--hip-exclusion E`` changes the time before take-off a short window's hip fit leaves out
+(``recording_fits.takeoff_exclusion_s``, default 0.02 s; 0 turns it off).
+
 ``--noise-repeat`` adds the batch analysis of the same simulated trials sampled with another sensor-noise
 draw: how far the noisy cells move from the noise alone, the resolution of a 2 pp bound on them.
 
@@ -96,6 +99,9 @@ def main() -> None:
                         help="anchor the previous hop's post-take-off motion to the last FRAMES frames (0: straight line only)")
     parser.add_argument("--exclude-takeoff", type=float, default=0.0, metavar="E",
                         help="short windows only: leave the last E s before take-off out of the fit's objective")
+    parser.add_argument("--hip-exclusion", type=float, metavar="E",
+                        help="short windows: the hip's time before take-off left out of the fit "
+                             "(recording_fits.SHORT_WINDOW_HIP_EXCLUSION_S, default 0.02 s)")
     parser.add_argument("--noise-repeat", action="store_true",
                         help="also the batch analysis of the same trials with another sensor-noise draw: the cells' "
                              "repeatability, against which a 2 pp move of a noisy cell is read")
@@ -105,6 +111,10 @@ def main() -> None:
     if args.stance_cost:
         stance_cost(args.pads[0])
         return
+    if args.hip_exclusion is not None:
+        import hop_impedance.impedance.recording_fits as recording_fits
+
+        recording_fits.SHORT_WINDOW_HIP_EXCLUSION_S = args.hip_exclusion  # takeoff_exclusion_s reads it at call time
     if args.template is not None:
         analysis.MARKER_TEMPLATE, analysis.MARKER_TEMPLATE_FRAMES = args.template > 0, max(args.template, 1)
     if args.marker_fit:
