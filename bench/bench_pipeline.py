@@ -80,9 +80,8 @@ class Listener:
         import threading
 
         import rclpy
-        from geometry_msgs.msg import WrenchStamped
 
-        from hop_impedance.nodes.common import CONTROLLER_TOPIC, stamp_ns
+        from hop_impedance.nodes.common import CONTROLLER_TOPIC, header_stamp_ns, raw_wrench_subscription, stamp_ns
         from hop_impedance.nodes.qos import history_qos, input_qos
         from hop_impedance_msgs.msg import ControllerImpedance
 
@@ -91,12 +90,15 @@ class Listener:
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
         self.node = rclpy.create_node("latency_listener", context=self.context)
-        self.node.create_subscription(WrenchStamped, "/force_plate/wrench",
-                                      lambda m: self.force.setdefault(stamp_ns(m.header.stamp), time.monotonic()), input_qos(True))
+        # raw CDR, only the stamp read: the listener shares the machine with the pipeline it measures (1 kHz)
+        raw_wrench_subscription(self.node, "/force_plate/wrench",
+                                lambda cdr: self.force.setdefault(header_stamp_ns(cdr), time.monotonic()), input_qos(True))
         self.controller_sub = self.node.create_subscription(ControllerImpedance, CONTROLLER_TOPIC,
                                       lambda m: self.controller.append((stamp_ns(m.header.stamp), time.monotonic())),
                                       history_qos(100))  # not depth 1: several stances' messages may come at once
-        self.executor = rclpy.executors.SingleThreadedExecutor(context=self.context)
+        from rclpy.experimental import EventsExecutor
+
+        self.executor = EventsExecutor(context=self.context)  # the pipeline's executor: the cheapest per message
         self.executor.add_node(self.node)
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self._spin, daemon=True)
