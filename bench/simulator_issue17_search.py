@@ -60,12 +60,19 @@ def search_one(a_min: float, iterations: int, tolerance: float, surface: str = "
         failed = len(errors)
         notes.append(f"{f:g} Hz: {len(cal.history)} fitted steps, {failed} trials without a hop, best worst deviation "
                      f"{calibration_dev[f]:.1%} ({time.perf_counter() - t0:.0f} s)")
+    print(f"  a_min {a_min:g} law_scale = " + law_text(scales), flush=True)  # before the criteria, which may fail
     rows, measures = criteria({**options, "law_scale": scales}, surface=surface)
     _, out = realism_rows(measures)
     fit_dev = {f: worst_deviation(m.fitted, table2_k(f)) for f, m in measures.items()}
     return {"a_min": a_min, "scales": scales, "calibration_dev": calibration_dev, "fit_dev": fit_dev, "out": out,
             "forbidden": [c for c in out if any(c.startswith(k) for k in FORBIDDEN_OUT)],
             "passed": sum(r.passed for r in rows), "rows": len(rows), "notes": notes}
+
+
+def law_text(scales: dict) -> str:
+    """``{f: (k0 factors, k1 factors)}`` as Python text."""
+    return "{" + ", ".join(f"{f:g}: ({tuple(float(v) for v in s[0])}, {tuple(float(v) for v in s[1])})"
+                           for f, s in scales.items()) + "}"
 
 
 def line(r: dict) -> str:
@@ -94,8 +101,7 @@ def main() -> None:
         print(f"a_min {a_min:g} ({time.perf_counter() - t0:.0f} s):")
         for n in r["notes"]:
             print("  " + n)
-        print("  law_scale = {" + ", ".join(f"{f:g}: ({tuple(float(v) for v in s[0])}, {tuple(float(v) for v in s[1])})"
-                                             for f, s in r["scales"].items()) + "}")
+        print("  law_scale = " + law_text(r["scales"]))
         print(header + "\n" + line(r), flush=True)
     print("\nTrade-off (a_min vs cells out vs worst fit deviation):\n" + header)
     for r in results:
