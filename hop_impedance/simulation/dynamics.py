@@ -343,3 +343,17 @@ def internal_kinetic_energy_j(chain: Chain, q: np.ndarray, qd: np.ndarray) -> fl
     """Kinetic energy of segment motion relative to the whole-body COM (J); see :func:`internal_mass_matrix`."""
     qd = np.asarray(qd, float)
     return 0.5 * float(qd @ internal_mass_matrix(chain, q) @ qd)
+
+
+def hip_over_com_drop_bound(chain: Chain) -> float:
+    """Largest ratio of the hip's vertical drop to the whole-body COM's drop for a small sink with the trunk upright.
+
+    Issue 17 (the seed's hip excursion against the COM drop its own peak GRF and stance imply): with the HAT
+    translating with the hip (no pitch change, so its COM falls exactly as far as the hip), the thigh turning
+    about a knee that does not fall, and shank and foot still, the hip falls ``h`` while the thigh's COM falls
+    ``h a_3 / L_3`` (its COM ``a_3`` from the knee along a thigh of length ``L_3``; exact to first order in ``h``
+    and for ``com_perp_m[2] = 0``). Any fall of the knee, shank or foot, or a forward pitch of the trunk, lowers
+    the COM more and the ratio below this bound, ``M / (m_HAT + m_thigh a_3 / L_3)``.
+    """
+    thigh_share = chain.com_along_m[2] / chain.length_m[2]
+    return float(chain.total_mass_kg / (chain.mass_kg[3] + chain.mass_kg[2] * thigh_share))
