@@ -26,9 +26,12 @@ Runs the node graph in one process (EventsExecutor) on a bundled recording:
 the largest relative difference |live - offline| / |offline| of any coefficient per joint: the same
 figures in every run show that the live result does not depend on message timing.
 
-Usage: .venv/bin/python bench/bench_pipeline.py [REC.mcap] [--latency-only [--modes "pad 5,low-latency"] | --live-vs-offline N]
+Usage: .venv/bin/python bench/bench_pipeline.py [REC.mcap] [--latency-only [--modes "pad 5,low-latency"] [--repeat N]
+       | --live-vs-offline N]
 
-``--modes`` runs only the latency rows whose name contains one of the comma-separated strings.
+``--modes`` runs only the latency rows whose name contains one of the comma-separated strings;
+``--repeat N`` runs each of them N times and adds a line pooling every stance of the N runs (a p99
+over 10 stances is their maximum).
 """
 
 import os
@@ -158,8 +161,9 @@ def offline_events(rec: str) -> list[tuple[int, int]]:
     return [(a.start_ns + round(s.touchdown_s * 1e9), a.start_ns + round(s.takeoff_s * 1e9)) for s in a.stances if s.complete]
 
 
-def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> str:
-    """One line: take-off -> /impedance/controller over every stance (module docstring, item 0)."""
+def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> tuple[str, np.ndarray]:
+    """One line: take-off -> /impedance/controller over every stance (module docstring, item 0), and the
+    per-stance latencies (ms, NaN where no controller message came)."""
     load = os.getloadavg()[0]
     listener = Listener()
     gc_pauses = GcPauses()
@@ -210,7 +214,7 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> str:
             f"{d('/impedance_estimator', 'takeoff_to_receipt_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_receipt_p99_ms')} ms;"
             f" analysis {d('/inverse_dynamics', 'analysis_p50_ms')}/{d('/inverse_dynamics', 'analysis_p99_ms')} ms); "
             f"load average {load:.1f} on {os.cpu_count()} cores; {gc_pauses.line(arrival.min() if arrival.size else 0.0)}; per stance (ms) "
-            + " ".join(f"{x:.1f}" for x in lat))
+            + " ".join(f"{x:.1f}" for x in lat)), lat
 
 
 def live_vs_offline(rec: str, runs: int) -> None:
@@ -245,7 +249,9 @@ def live_vs_offline(rec: str, runs: int) -> None:
 
 def main() -> None:
     only = sys.argv[sys.argv.index("--modes") + 1].split(",") if "--modes" in sys.argv else None
-    args = [a for a in sys.argv[1:] if not a.startswith("--") and (only is None or a != ",".join(only))]
+    repeat = int(sys.argv[sys.argv.index("--repeat") + 1]) if "--repeat" in sys.argv else 1
+    args = [a for a in sys.argv[1:] if not a.startswith("--") and (only is None or a != ",".join(only))
+            and not ("--repeat" in sys.argv and a == str(repeat))]
     if "--live-vs-offline" in sys.argv:
         runs = int(sys.argv[sys.argv.index("--live-vs-offline") + 1])
         args = [a for a in args if a != str(runs)]
@@ -267,7 +273,16 @@ def main() -> None:
                      ("one process, pad 3 ms", pad3), ("--processes, pad 3 ms", {**pad3, "processes": True})):
         if only is not None and not any(o in name for o in only):
             continue
-        print(f"{name:<26}: {controller_latency(rec, events, **kw)}", flush=True)
+        pooled = []
+        for _ in range(repeat):
+            line, lat = controller_latency(rec, events, **kw)
+            pooled.append(lat)
+            print(f"{name:<26}: {line}", flush=True)
+        if repeat > 1:
+            lat = np.concatenate(pooled)
+            ok = lat[np.isfinite(lat)]
+            print(f"{name:<26}: pooled over {repeat} runs: p50 {np.percentile(ok, 50):.1f} ms, p99 {np.percentile(ok, 99):.1f} ms, "
+                  f"max {ok.max():.1f} ms over {ok.size} of {lat.size} stances", flush=True)
     if "--latency-only" in sys.argv:
         return
     infos = {i.topic: i for i in summarize(rec)}
