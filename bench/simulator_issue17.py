@@ -97,8 +97,16 @@ BELL09_RIGID_PAD15_3_LAW_SCALE = {
     1.87: ((1.0, 1.0, 1.0), (1.0, 1.0, 1.0)),
     2.2: ((1.016024, 0.996119, 1.0), (0.963142, 0.939244, 1.0)),
 }
+#: a_min 0.8 with ``--surface rigid --pad 15,3`` (``bench/simulator_issue17_search.py --a-min 0.85,0.8 --surface rigid
+#: --pad 15,3``, session 11, load 2.7-3.6; calibration worst deviation 4 / 9 / 2 %).
+BELL08_RIGID_PAD15_3_LAW_SCALE = {
+    1.53: ((0.976598, 1.203881, 1.0), (0.987704, 0.406443, 1.0)),
+    1.87: ((1.179777, 1.01606, 1.0), (0.861108, 0.935426, 1.0)),
+    2.2: ((1.316003, 1.08489, 1.0), (0.595233, 0.779264, 1.0)),
+}
 LAW_SCALES = {"none": None, "seed_like": SEED_LIKE_LAW_SCALE, "bell09": BELL09_LAW_SCALE,
-              "bell09_rigid_pad10": BELL09_RIGID_PAD10_LAW_SCALE, "bell09_rigid_pad15_3": BELL09_RIGID_PAD15_3_LAW_SCALE}
+              "bell09_rigid_pad10": BELL09_RIGID_PAD10_LAW_SCALE, "bell09_rigid_pad15_3": BELL09_RIGID_PAD15_3_LAW_SCALE,
+              "bell08_rigid_pad15_3": BELL08_RIGID_PAD15_3_LAW_SCALE}
 
 
 @dataclass
