@@ -79,7 +79,8 @@ def unexpected_hard_vs_soft(freq_hz: float = 2.2, effects: Effects = Effects(), 
     q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
     cal = calibrate(chain, cfg, q)
     if not cal.success:
-        raise ValueError(f"{freq_hz} Hz: no calibrated hop on the soft surface")
+        raise ValueError(f"{freq_hz} Hz: no calibrated hop on the soft surface (closest: stance {1000 * cal.stance_s:.0f} ms, "
+                         f"flight {1000 * cal.flight_s:.0f} ms at touchdown speed {cal.speed_m_s:.2f} m/s)")
     law = scale_push_off(cfg.law, cal.push_scale)
     td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
     pad = cfg.surface.pad if isinstance(cfg.surface, PaddedGround) else None  # a shoe pad stays on both surfaces
