@@ -7,10 +7,10 @@ searches with their evaluations of all stances), the mean time per candidate (a 
 round's pool time), the CPU time of the run (this process and its worker processes: less dependent on
 the machine's load than the wall time) and the load average before and after.
 
-``--search``: the stiffness gate's k0 search (:data:`hop_impedance.discovery.stiffness_gate.SEARCH`).
+``--search``: the stiffness gate's search (:data:`hop_impedance.discovery.stiffness_gate.SEARCH`).
 
 Usage: .venv/bin/python bench/bench_discovery.py [--workers N] [--recording REC.mcap]
-       [--search nelder-mead|levenberg-marquardt]
+       [--search nelder-mead|levenberg-marquardt] [--converge] [--effect-size]
 """
 
 from __future__ import annotations
@@ -32,8 +32,10 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=None)
     ap.add_argument("--recording", default="", help="an MCAP recording instead of the simulated 10-hop one")
     ap.add_argument("--search", choices=("nelder-mead", "levenberg-marquardt"), default=stiffness_gate.SEARCH)
+    ap.add_argument("--converge", action="store_true", help="stiffness_gate.TO_CONVERGENCE (session 10)")
+    ap.add_argument("--effect-size", action="store_true", help="stiffness_gate.SHOOT_EFFECT_SIZE (session 10)")
     args = ap.parse_args()
-    stiffness_gate.SEARCH = args.search
+    _configure(args)
     if args.recording:
         rec = load_recording(args.recording)
     else:
@@ -45,7 +47,8 @@ def main() -> None:
     total, cpu = time.perf_counter() - t0, _cpu_s() - cpu0
     tm = doc["timing"]
     after = [b["seconds"] for b in doc["nuisance"].get("body_mass_split_after_step", [])]
-    searches = [[(name, g["evaluations"], *g["in_sample_gap_regression_shot"])
+    searches = [[(name, g["evaluations"], g["converged"], *g["in_sample_gap_regression_shot"], g["effect_factors_shot"],
+                  g.get("p_value"))
                  for name, g in [("current", st["current"]), *st["candidates"].items()]]
                 for st in doc["selection"]["stiffness_through_simulation"]]
     print(f"recording: {args.recording or '10-hop simulated, angle-dependent stiffness'}; search {args.search}; "
@@ -54,11 +57,21 @@ def main() -> None:
           + (", ".join(f"{b:.1f}" for b in after) or "-") + f" s; baseline held-out runs "
           f"{tm['baseline_s']:.1f} s; rounds " + ", ".join(f"{r:.1f}" for r in tm["rounds"]) + " s; stiffness gate "
           + (", ".join(f"{r:.1f}" for r in tm["stiffness_s"]) or "not needed") + " s)")
-    print("stiffness searches per gate (model, evaluations of all stances, in-sample gap with the regression's k0 "
-          "and with the shot k0; a current model named in the round before reuses that search): " + str(searches))
+    print("stiffness searches per gate (model, evaluations of all stances, converged, in-sample gap with the "
+          "regression's coefficients and shot, the effect's shot factors per joint, the gate's p-value; a current "
+          "model named in the round before reuses that search): " + str(searches))
     print(f"CPU time (this process and its workers): {cpu:.1f} s; load average (1 min) before {load0:.2f}, "
           f"after {os.getloadavg()[0]:.2f}")
     print("mean time per candidate (s): " + ", ".join(f"{k} {v:.1f}" for k, v in tm["per_candidate_s"].items()))
+
+
+def _configure(args: argparse.Namespace) -> None:
+    """The gate's search and its session-10 options (stiffness_gate.TO_CONVERGENCE, SHOOT_EFFECT_SIZE)."""
+    stiffness_gate.SEARCH = args.search
+    if args.converge:
+        for name, value in stiffness_gate.TO_CONVERGENCE.items():
+            setattr(stiffness_gate, name, value)
+    stiffness_gate.SHOOT_EFFECT_SIZE = args.effect_size
 
 
 def _cpu_s() -> float:

@@ -15,6 +15,7 @@ from scipy.integrate import trapezoid
 from hop_impedance.biomech.analysis import AnalysisOptions
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.discovery import forward_selection as fs
+from hop_impedance.discovery import stiffness_gate
 from hop_impedance.discovery.body_nuisance import choose_body
 from hop_impedance.discovery.identify import SIGNALS, core, identify, residuals
 from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
@@ -202,23 +203,26 @@ def _gated(ev: fs.HeldOutEvaluator, fitted: tuple[ModelSpec, np.ndarray], scores
     """The candidate to name (at most one) and the stiffness gate's figures by effect.
 
     Only when some candidate passed the held-out test is the current model's k0 (``fitted``: the model and
-    its coefficients identified on all stances) chosen through the
-    simulation, then that of each passing candidate in the order of its mean log gap ratio until one beats
-    the current model so (:mod:`hop_impedance.discovery.stiffness_gate`); the figures go to
-    ``selection.stiffness_through_simulation``, the searches' time to ``timing.stiffness_s``. ``shots``
-    keeps every search by model: the candidate named in one round is the next round's current model (same
+    its coefficients identified on all stances) chosen through the simulation, then k0 of each passing
+    candidate in the order of its mean log gap ratio until one beats the current model so
+    (:mod:`hop_impedance.discovery.stiffness_gate`); the figures go to ``selection.stiffness_through_simulation``,
+    the searches' time to ``timing.stiffness_s``. With ``stiffness_gate.SHOOT_EFFECT_SIZE`` (session 10's
+    trial, off) also the size of the effect each adds. ``shots`` keeps every search by model: the candidate
+    named in one round is the next round's current model (same
     body split: same model and coefficients), whose search is then not repeated.
     """
     ok = sorted((sc for sc in scores if fs.passes(sc, n_candidates)), key=lambda sc: -sc.mean_log_ratio)
     if not ok:
         return [], {}
     t0 = time.perf_counter()
-    shot = shots.get(_model_key(*fitted)) or shoot_stiffness(ev, *fitted)
+    sized = stiffness_gate.SHOOT_EFFECT_SIZE
+    last = fitted[0].effects[-1] if fitted[0].effects and sized else None
+    shot = shots.get(_model_key(*fitted)) or shoot_stiffness(ev, *fitted, effect=last)
     gates: dict = {}
     for sc in ok:
         trial = fs.trial_for(sc.runs.spec)
         cand = identify(sc.runs.spec, trial, trial.stances)
-        shots[_model_key(*cand)] = shoot_stiffness(ev, *cand, shot)
+        shots[_model_key(*cand)] = shoot_stiffness(ev, *cand, shot, effect=sc.effect if sized else None)
         gates[sc.effect] = gate(shots[_model_key(*cand)], shot, n_candidates)
         if gates[sc.effect]["passes"]:
             break
