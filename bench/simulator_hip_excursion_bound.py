@@ -11,6 +11,9 @@ own peak GRF and stance (``simulator_realism.newton_com_drop``: a sin^n force wi
 force of the same impulse drops the COM less, so this is the seed's smallest ratio); (3) in one simulated stance
 per frequency (the third, noise-free, ``seed_like_options()`` with a_min 0.9 and its calibrated law on the hard
 surface) the drop from touchdown to the lowest point of the hip, the body's COM and each segment's COM.
+The bound is on drops from the touchdown height; a stance *range* of the hip can be larger when the hip stands
+higher at take-off than at touchdown, so the table also prints how much higher the seed's hip would have to be
+at take-off (seed excursion minus bound x its COM drop) and our hip's take-off minus touchdown height.
 """
 
 from __future__ import annotations
@@ -43,8 +46,9 @@ def main() -> None:
           f"{', '.join(f'{m:.1f}' for m in chain.mass_kg)} kg; thigh COM {chain.com_along_m[2] / chain.length_m[2]:.3f} "
           f"of its length from the knee)")
     print("| f (Hz) | seed hip excursion (m) | Newton COM drop for the seed's peak GRF and stance (m) | seed ratio | "
-          "vs bound | sim drops (m): hip / body COM / HAT / thigh / shank / foot COM, toe | sim ratio | trunk pitch "
-          "change at the COM's lowest (rad) |\n|---|---|---|---|---|---|---|---|")
+          "vs bound | seed hip at take-off above touchdown needed (m) | sim drops (m): hip / body COM / HAT / thigh / "
+          "shank / foot COM, toe | sim ratio | sim hip take-off minus touchdown height (m) | trunk pitch change at the "
+          "COM's lowest (rad) |\n|---|---|---|---|---|---|---|---|---|---|")
     for f, seed in SEED_TABLE1.items():
         _, drop = newton_com_drop(f, seed["stance_ms"] / 1000.0, seed["grf_bw"])
         ratio = seed["hip_exc_m"] / drop
@@ -56,9 +60,10 @@ def main() -> None:
         drops = [z[0] - z.min() for z in (hip, com, segments[:, 3], segments[:, 2], segments[:, 1], segments[:, 0],
                                           st.g[:, 1])]
         low = int(np.argmin(com))
+        needed = max(seed["hip_exc_m"] - bound * drop, 0.0)
         print(f"| {f:g} | {seed['hip_exc_m']:.2f} | {drop:.3f} | {ratio:.2f} | {'above' if ratio > bound else 'below'} | "
-              f"{' / '.join(f'{d:.3f}' for d in drops[:6])}, {drops[6]:.3f} | {drops[0] / drops[1]:.2f} | "
-              f"{st.g[low, 5] - st.g[0, 5]:+.3f} |", flush=True)
+              f"{needed:.4f} | {' / '.join(f'{d:.3f}' for d in drops[:6])}, {drops[6]:.3f} | {drops[0] / drops[1]:.2f} | "
+              f"{hip[-1] - hip[0]:+.4f} | {st.g[low, 5] - st.g[0, 5]:+.3f} |", flush=True)
 
 
 if __name__ == "__main__":

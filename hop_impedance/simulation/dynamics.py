@@ -351,9 +351,11 @@ def hip_over_com_drop_bound(chain: Chain) -> float:
     Issue 17 (the seed's hip excursion against the COM drop its own peak GRF and stance imply): with the HAT
     translating with the hip (no pitch change, so its COM falls exactly as far as the hip), the thigh turning
     about a knee that does not fall, and shank and foot still, the hip falls ``h`` while the thigh's COM falls
-    ``h a_3 / L_3`` (its COM ``a_3`` from the knee along a thigh of length ``L_3``; exact to first order in ``h``
-    and for ``com_perp_m[2] = 0``). Any fall of the knee, shank or foot, or a forward pitch of the trunk, lowers
-    the COM more and the ratio below this bound, ``M / (m_HAT + m_thigh a_3 / L_3)``.
+    ``h a_3 / L_3`` (its COM ``a_3`` from the knee along a thigh of length ``L_3``; exact for any ``h`` when
+    ``com_perp_m[2] = 0``, as the COM's height is linear along the segment). Any fall of the knee, shank or foot,
+    or a forward pitch of the trunk, lowers the COM more and the ratio below this bound,
+    ``M / (m_HAT + m_thigh a_3 / L_3)``. It bounds the drops from the touchdown posture; a stance *range* of the
+    hip can exceed it when the hip stands higher at take-off than at touchdown.
     """
     thigh_share = chain.com_along_m[2] / chain.length_m[2]
     return float(chain.total_mass_kg / (chain.mass_kg[3] + chain.mass_kg[2] * thigh_share))
