@@ -184,7 +184,11 @@ class PaddedGround:
         return {**self.surface.to_dict(), "pad_in_series": self.pad.to_dict()}
 
 
-def with_pad(law: GroundLaw, pad: GroundLaw | None) -> GroundLaw | PaddedGround:
+#: What the foot meets: a surface law, or one with a shoe pad in series (:func:`with_pad`).
+Ground = GroundLaw | PaddedGround
+
+
+def with_pad(law: Ground, pad: GroundLaw | None) -> Ground:
     """``law`` with ``pad`` in series (:class:`PaddedGround`); ``pad`` None: ``law`` itself."""
     if pad is None:
         return law

@@ -67,7 +67,7 @@ from hop_impedance.simulation.dynamics import (
     internal_kinetic_energy_j,
     internal_mass_matrix,
 )
-from hop_impedance.simulation.ground import GroundLaw
+from hop_impedance.simulation.ground import Ground
 from hop_impedance.simulation.impedance_laws import CompositeLaw, Eq3Law, ImpedanceLaw, PushOff, TrunkBalance
 from hop_impedance.simulation.stance import (
     DEFAULT_ATOL,
@@ -144,11 +144,11 @@ class HoppingConfig:
 
     freq_hz: float
     n_hops: int
-    surface: GroundLaw
+    surface: Ground
     law: ImpedanceLaw
     touchdown_rho_rad: tuple[float, float, float]
     com_ahead_m: float = 0.0
-    unexpected_surface: GroundLaw | None = None
+    unexpected_surface: Ground | None = None
     unexpected_hops: tuple[int, ...] = ()
     posture_sd_rad: float = 0.01
     speed_sd: float = 0.02
@@ -171,7 +171,7 @@ class HoppingConfig:
         if self.n_hops < 1:
             raise ValueError(f"n_hops must be at least 1, got {self.n_hops}")
 
-    def surface_for_hop(self, hop: int) -> GroundLaw:
+    def surface_for_hop(self, hop: int) -> Ground:
         """Surface under hop ``hop`` (0-based)."""
         if self.unexpected_surface is not None and hop in self.unexpected_hops:
             return self.unexpected_surface
@@ -337,7 +337,7 @@ class StanceRecord:
     index: int
     t_touchdown_s: float
     stance: StanceSimulation
-    surface: GroundLaw
+    surface: Ground
     law: ImpedanceLaw
     touchdown: TouchdownState
 

@@ -18,7 +18,7 @@ from hop_impedance.recording import GRAVITY_M_S2, Subject
 from hop_impedance.seed_tables import JOINTS as TABLE2_JOINTS
 from hop_impedance.seed_tables import TABLE2_EQ10
 from hop_impedance.simulation.dynamics import Chain, chain_from_body_model, contact_ahead_of_toe_marker
-from hop_impedance.simulation.ground import GroundLaw, surface, with_pad
+from hop_impedance.simulation.ground import Ground, GroundLaw, surface, with_pad
 from hop_impedance.simulation.hopping_trial import HoppingConfig, joint_triple, touchdown_posture, touchdown_state
 from hop_impedance.simulation.impedance_laws import (
     BellActivation,
@@ -222,7 +222,7 @@ def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_durati
     return CompositeLaw((eq3, push))
 
 
-def nominal_stance_s(chain: Chain, law: ImpedanceLaw, ground: GroundLaw, rho_td, freq_hz: float) -> float:
+def nominal_stance_s(chain: Chain, law: ImpedanceLaw, ground: Ground, rho_td, freq_hz: float) -> float:
     """Stance time (s) of one passive stance at a typical touchdown speed, to time the push-off."""
     q = touchdown_posture(chain, np.asarray(rho_td, float))
     speed = chain.gravity_m_s2 * 0.4 / freq_hz / 2.0
@@ -277,15 +277,11 @@ def hopping_config(
     law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts, hip_trunk_spring_nm_rad, bell,
                     law_scale)
     config = HoppingConfig(
-        freq_hz=freq_hz,
-        n_hops=n_hops,
-        surface=expected,
-        law=law,
+        freq_hz=freq_hz, n_hops=n_hops, surface=expected, law=law,
         touchdown_rho_rad=joint_triple(touchdown_rho_rad),
         unexpected_surface=with_pad(surface(unexpected_surface), pad) if unexpected_surface else None,
         unexpected_hops=tuple(unexpected_hops),
-        posture_sd_rad=0.01 if variability else 0.0,
-        speed_sd=0.02 if variability else 0.0,
+        posture_sd_rad=0.01 if variability else 0.0, speed_sd=0.02 if variability else 0.0,
         push_sd=0.03 if variability else 0.0,
         trunk_balance=trunk_balance,
         flight=flight,

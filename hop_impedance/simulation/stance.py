@@ -47,7 +47,7 @@ from hop_impedance.simulation.dynamics import (
     com_velocity,
     mechanical_energy_j,
 )
-from hop_impedance.simulation.ground import GroundLaw
+from hop_impedance.simulation.ground import Ground
 from hop_impedance.simulation.impedance_laws import ImpedanceLaw, TouchdownReference, TrunkBalance
 
 #: Free coordinates in stance: z_toe, q1..q4 (x_toe fixed).
@@ -151,7 +151,7 @@ class _StanceSystem:
     friction force ``Fx = slide_sign mu Fz``.
     """
 
-    def __init__(self, chain: Chain, law: ImpedanceLaw, ground: GroundLaw, td: TouchdownState,
+    def __init__(self, chain: Chain, law: ImpedanceLaw, ground: Ground, td: TouchdownState,
                  friction_coefficient: float | None, phases: tuple = ((0.0, 0),),
                  trunk_balance: TrunkBalance | None = None):
         self.chain, self.law, self.ground = chain, law, ground
@@ -272,7 +272,7 @@ class _PiecewiseDense:
 def simulate_stance(
     chain: Chain,
     law: ImpedanceLaw,
-    ground: GroundLaw,
+    ground: Ground,
     touchdown: TouchdownState,
     t_max_s: float = 1.0,
     *,
@@ -469,7 +469,7 @@ def _integrate_phase(rhs, span: tuple[float, float], y0: np.ndarray, events: lis
                                f"Radau: {radau_error})") from radau_error
 
 
-def resample_stance(chain: Chain, law: ImpedanceLaw, ground: GroundLaw, touchdown: TouchdownState,
+def resample_stance(chain: Chain, law: ImpedanceLaw, ground: Ground, touchdown: TouchdownState,
                     stance: StanceSimulation, t_since_td: np.ndarray) -> StanceSimulation:
     """``stance`` (integrated by :func:`simulate_stance` with these inputs) at other times since
     touchdown (s), from its dense output without re-integration; times are clipped to the stance."""
@@ -496,7 +496,7 @@ def _collect(system: _StanceSystem, times: np.ndarray, ys: np.ndarray, end: str,
                             tuple(system.phases), system.mu, system.trunk, trunk)
 
 
-def stance_energy_j(chain: Chain, law: ImpedanceLaw, ground: GroundLaw, stance: StanceSimulation) -> np.ndarray:
+def stance_energy_j(chain: Chain, law: ImpedanceLaw, ground: Ground, stance: StanceSimulation) -> np.ndarray:
     """Total mechanical energy (J) at each sample: kinetic + gravity + joint springs + surface.
 
     Only defined for conservative laws (see :meth:`ImpedanceLaw.elastic_energy_j`). A trunk-balance
