@@ -58,7 +58,7 @@ def main() -> None:
           f"{tm['baseline_s']:.1f} s; rounds " + ", ".join(f"{r:.1f}" for r in tm["rounds"]) + " s; stiffness gate "
           + (", ".join(f"{r:.1f}" for r in tm["stiffness_s"]) or "not needed") + " s)")
     print("stiffness searches per gate (model, evaluations of all stances, converged, in-sample gap with the "
-          "regression's coefficients and shot, the effect's shot factors per joint, the gate's p-value; a current "
+          "regression's coefficients and shot, the effect's shot size, the gate's p-value; a current "
           "model named in the round before reuses that search): " + str(searches))
     print(f"CPU time (this process and its workers): {cpu:.1f} s; load average (1 min) before {load0:.2f}, "
           f"after {os.getloadavg()[0]:.2f}")

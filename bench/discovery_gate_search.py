@@ -5,7 +5,7 @@ model and of each passing candidate through the simulation; both searches run to
 (``STEP_TOL``, ``GAP_TOL``; a search that reaches its safety cap says ``converged False``). If the gate
 is budget-independent, both name the same effects. Per recording and search: the effects named, the wall
 and CPU time, and per gate and model the evaluations, whether it converged, the in-sample gap with the
-regression's and the shot coefficients, the effect's shot factors and the gate's p-value.
+regression's and the shot coefficients, the effect's shot size and the gate's p-value.
 
 Usage: .venv/bin/python bench/discovery_gate_search.py [--searches levenberg-marquardt,nelder-mead]
        [--converge] [--effect-size] [--strict-null-seeds 3,47 [--hops 8]] [REC.mcap ...]
@@ -77,7 +77,7 @@ def _row(name: str, search: str, rec) -> str:
              for st in doc["selection"]["stiffness_through_simulation"]]
     return (f"{name} | {search}: named {doc['effects_found']}; {wall:.1f} s, CPU {cpu:.1f} s, load "
             f"{load0:.2f} -> {os.getloadavg()[0]:.2f}\n  gates (model, evaluations, converged, gap regression, "
-            f"gap shot, effect factors, p): {gates}")
+            f"gap shot, effect size, p): {gates}")
 
 
 def _cpu_s() -> float:

@@ -60,7 +60,10 @@ pool map) converges further in fewer simulations than Nelder-Mead (session 9: ba
 evaluations against 0.0191 in 20 on the bench recording); it is not the default because on 1201 its k0-only
 gate names nothing (constant model 0.0082, angle law 0.0057, p = 0.056), while Nelder-Mead stopped at 20
 evaluations leaves the constant model at 0.018 and names the angle law: the outcome depends on the budget,
-which session 10's options do not remove either (above)."""
+which session 10's options do not remove either (above). k0 only with :data:`TO_CONVERGENCE` is the one
+configuration measured budget-independent: both searches name the angle law on the bench recording and
+nothing on 1201 (p 0.0075 / 0.021: session 9's LM p of 0.056 was its budget), and strict nulls 3 and 47
+are clean with LM (docs/discovery.md, Runtime); not the default (it loses 1201: the lead's call)."""
 
 from __future__ import annotations
 
