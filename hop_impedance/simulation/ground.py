@@ -159,9 +159,7 @@ class PaddedGround:
     def unclipped_force_n(self, y_m: float, ydot_m_s: float) -> float:
         """Law value (N) as :meth:`GroundLaw.unclipped_force_n`: series springs minus the surface's damper."""
         s, _ = self.split_m(-y_m)
-        law = self.surface
-        damping = law.damping_n_s_m * (s**law.damping_exponent if law.damping_exponent else 1.0)
-        return law.stiffness * s**law.exponent - damping * ydot_m_s
+        return self.surface.unclipped_force_n(-s, ydot_m_s)  # the surface at its share s of the penetration
 
     def force_n(self, y_m: float, ydot_m_s: float) -> float:
         """Vertical force on the toe (N), never negative, zero out of contact."""
