@@ -187,7 +187,7 @@ class StanceResult:
     hip_residual_rms_nm: float = float("nan")
     #: How far past the take-off the data of this stance's analysis reached (s): ``post_takeoff_s`` of a
     #: short window (:func:`analyze_short_window`, the low-latency stage), None for the whole record.
-    #: The fit leaves samples out near take-off when it is short (``stance_fit.takeoff_exclusion_s``).
+    #: The fit leaves samples out near take-off when it is short (``recording_fits.takeoff_exclusion_s``).
     data_after_takeoff_s: float | None = None
 
 
