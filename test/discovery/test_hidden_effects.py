@@ -11,15 +11,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from hop_impedance.biomech.body_model import body_model_from_stature
 from hop_impedance.discovery.forward_selection import law_gaps
 from hop_impedance.discovery.identify import compliance_index, identify, surface_split
-from hop_impedance.discovery.model import ModelSpec
 from hop_impedance.discovery.measurement import measure_trial
+from hop_impedance.discovery.model import ModelSpec
 from hop_impedance.discovery.workflow import discover
 from hop_impedance.simulation.dynamics import chain_from_body_model
-from hop_impedance.biomech.body_model import body_model_from_stature
-from hop_impedance.simulation.scenarios import SEED_SUBJECT, Effects
+from hop_impedance.simulation.hopping_trial import touchdown_posture, touchdown_state
+from hop_impedance.simulation.impedance_laws import CompositeLaw, PushOff
+from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, SEED_SUBJECT, Effects
 from hop_impedance.simulation.sensors import SensorConfig
+from hop_impedance.simulation.stance import simulate_stance
 from hop_impedance.simulation.stance_set import (
     EffectSizes,
     ground_law,
@@ -27,10 +30,6 @@ from hop_impedance.simulation.stance_set import (
     simulate_stance_set_recording,
     sized_law,
 )
-from hop_impedance.simulation.impedance_laws import CompositeLaw, PushOff
-from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO
-from hop_impedance.simulation.hopping_trial import touchdown_posture, touchdown_state
-from hop_impedance.simulation.stance import simulate_stance
 
 BASE = dict(angle_dependent_stiffness=False, damping=False, push_off=False)
 #: name -> (law switches, surfaces, sensor effects, frequency, seed)
