@@ -60,7 +60,16 @@ def run(rec: str, **kw):
     with tempfile.TemporaryDirectory() as out:
         c0, t0 = cpu_s(), time.monotonic()
         report = run_pipeline(PipelineConfig(rec, out, timeout_s=120, **kw))
-        return report, cpu_s() - c0, time.monotonic() - t0
+        cpu, wall = cpu_s() - c0, time.monotonic() - t0
+        log = os.path.join(out, "logs", "replay.log")  # --processes: the replay's own log (else on stdout)
+        lines = open(log).read().splitlines() if os.path.exists(log) else []
+        REPLAY_END[:] = [ln.split("]: ", 1)[-1] for ln in lines if "end of stream published" in ln]
+        return report, cpu, wall
+
+
+#: The replay process's end-of-stream line of the last ``--processes`` run (how long it waited for the readers'
+#: acknowledgement before its end-of-stream, which is when batch mode analyses a file's last stance).
+REPLAY_END: list[str] = []
 
 
 TIGHT = {"inverse_dynamics": {"post_pad_s": 0.01, "reorder_window_s": 0.002, "process_period_s": 0.001}}
@@ -217,7 +226,7 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> tuple[s
             f"{d('/impedance_estimator', 'takeoff_to_receipt_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_receipt_p99_ms')} ms;"
             f" analysis {d('/inverse_dynamics', 'analysis_p50_ms')}/{d('/inverse_dynamics', 'analysis_p99_ms')} ms); "
             f"load average {load:.1f} on {os.cpu_count()} cores; {gc_pauses.line(arrival.min() if arrival.size else 0.0)}; per stance (ms) "
-            + " ".join(f"{x:.1f}" for x in lat)), lat
+            + " ".join(f"{x:.1f}" for x in lat) + "".join(f"; replay: {x}" for x in REPLAY_END)), lat
 
 
 def live_vs_offline(rec: str, runs: int) -> None:

@@ -175,9 +175,12 @@ class ReplayNode(Node):
                 if not loop or span <= 0:
                     break
                 shift += span
+            t_drain = time.monotonic()
             self._drain()
             self._publish_end()
             self.play_s = time.monotonic() - t_play
+            self.get_logger().info(f"end of stream published after {time.monotonic() - t_drain:.3f} s waiting for the "
+                                   "readers' acknowledgement of the last messages")
         except (RecordingError, ValueError) as exc:
             self.error = str(exc)
             self.get_logger().error(self.error)
