@@ -209,12 +209,13 @@ def fit_rows(measures: dict) -> list[Row]:
     return rows
 
 
-def seed001_rows(options: dict, freqs=FREQS) -> list[Row]:
-    """Seed 001's directions at each frequency (one stance pair, soft expected, hard unexpected)."""
+def seed001_rows(options: dict, freqs=FREQS, keep_pad: bool = False) -> list[Row]:
+    """Seed 001's directions at each frequency (one stance pair, soft expected, hard unexpected), on seed 001's
+    surface laws without the variant's shoe pad unless ``keep_pad`` (``surface_surprise.seed001_options``)."""
     surprise, failed = {}, {}
     for f in freqs:
         try:
-            surprise[f] = unexpected_hard_vs_soft(f, **options)
+            surprise[f] = unexpected_hard_vs_soft(f, keep_pad=keep_pad, **options)
         except ValueError as exc:  # e.g. no calibrated hop on the soft surface: a failed row, not a crash
             failed[f] = str(exc)
     figures = {
@@ -231,11 +232,12 @@ def seed001_rows(options: dict, freqs=FREQS) -> list[Row]:
 
 
 def criteria(options: dict, hops: int = 10, seed: int = 1, surface: str = "hard", freqs=FREQS,
-             seed001: bool = True) -> tuple[list[Row], dict]:
+             seed001: bool = True, seed001_keep_pad: bool = False) -> tuple[list[Row], dict]:
     """All rows for ``options`` and the measures by frequency (``freqs``, ``seed001``: a partial table)."""
     measures = {f: measure_frequency(f, options, hops, seed, surface) for f in freqs}
     realism, _ = realism_rows(measures)
-    return realism + fit_rows(measures) + (seed001_rows(options, freqs) if seed001 else []), measures
+    seed001_part = seed001_rows(options, freqs, seed001_keep_pad) if seed001 else []
+    return realism + fit_rows(measures) + seed001_part, measures
 
 
 def force_shape(measures: dict) -> str:
@@ -284,7 +286,8 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     if args.pad:
         mm, exponent = floats(args.pad, 2)
         options["pad"] = shoe_pad(mm / 1000.0, exponent)
-        said.append(f"shoe pad {mm:g} mm at 3 BW, n {exponent:g}")
+        said.append(f"shoe pad {mm:g} mm at 3 BW, n {exponent:g} (seed 001's rows "
+                    f"{'with it' if args.seed001_keep_pad else 'without it, on its MTP5-fitted laws'})")
     if args.posture:
         ankle, knee, hip = floats(args.posture, 3)
         options["touchdown_rho_rad"] = (ankle, np.pi + knee, np.pi + hip)
@@ -292,6 +295,9 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     if args.trunk:
         options["trunk_balance"] = TrunkBalance(*floats(args.trunk, 2))
         said.append(f"trunk balance {args.trunk} (N m/rad, N m s/rad)")
+    if args.push_timing:
+        options["push_timing"] = floats(args.push_timing, 2)
+        said.append(f"push-off from {options['push_timing'][0]:g} for {options['push_timing'][1]:g} of the passive stance")
     if args.contact_ahead is not None:
         options["contact_ahead_m"] = args.contact_ahead
         said.append(f"contact {args.contact_ahead:g} m ahead of the toe marker")
@@ -310,15 +316,20 @@ def main() -> None:
     parser.add_argument("--pad", metavar="MM,N", help="a shoe pad in series: MM mm at 3 body weights, exponent N")
     parser.add_argument("--posture", metavar="A,K,H", help="touchdown ankle rho1, knee and hip flexion (rad)")
     parser.add_argument("--trunk", metavar="K,B", help="trunk-balance stiffness and damping instead of 800,40")
+    parser.add_argument("--push-timing", metavar="ONSET,DURATION",
+                        help="push-off onset and duration as fractions of the passive stance instead of 0.5,0.5")
     parser.add_argument("--contact-ahead", type=float, default=None, metavar="M",
                         help="ground contact this far ahead of the toe marker (m) instead of the toe tip's")
     parser.add_argument("--freqs", default=",".join(f"{f:g}" for f in FREQS), help="a subset of 1.53,1.87,2.2")
     parser.add_argument("--no-seed001", action="store_true", help="leave seed 001's rows out (quicker)")
+    parser.add_argument("--seed001-keep-pad", action="store_true",
+                        help="seed 001's rows with the --pad in series with its laws (session 11; default: its bare "
+                             "laws, fitted at the MTP5 marker: surface_surprise.seed001_options)")
     parser.add_argument("--write", action="store_true", help="write the table into docs/simulator.md (defaults only)")
     args = parser.parse_args()
     freqs = tuple(f for f in FREQS if f in floats(args.freqs))
     variant = any((args.bell is not None, args.law_scale != "none", args.surface != "hard", args.pad, args.posture,
-                   args.trunk, args.contact_ahead is not None, freqs != FREQS, args.no_seed001))
+                   args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS, args.no_seed001))
     if args.write and variant:
         parser.error("--write stores seed_like_options' table only")
     try:
@@ -327,7 +338,8 @@ def main() -> None:
         parser.error(str(exc))
     t0 = time.perf_counter()
     try:
-        rows, measures = criteria(options, surface=args.surface, freqs=freqs, seed001=not args.no_seed001)
+        rows, measures = criteria(options, surface=args.surface, freqs=freqs, seed001=not args.no_seed001,
+                                  seed001_keep_pad=args.seed001_keep_pad)
     except ValueError as exc:  # e.g. a variant with which no periodic hop exists: one line, no traceback
         sys.exit(f"simulator_issue17: {setup}: no table: {exc}")
     text = markdown(rows)

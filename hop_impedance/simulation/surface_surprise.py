@@ -11,6 +11,15 @@ Joint stiffness (choice; seed 001 defines it as "the slope of the relationship b
 angle): the net moment's change over the angle's change from touchdown to the joint's maximal flexion (the
 loading phase), the hip's net moment including the trunk balance. "Falls most" is read relatively (hard / soft - 1),
 since the three joints' stiffnesses differ several-fold.
+
+Contact (choice, issue 17 session 12; tested in test/simulation/test_sim_surface_surprise.py): seed 001's two surface
+laws are the foot-surface interaction itself, not the surface alone. Its Methods: "The coefficients for these
+equations were based on an optimized fit of the subject's fifth metatarsophalangeal joint (MTP5) movement after
+touchdown as a function of the ground reaction force", with y "the vertical displacement (m) of the base of the model
+(representing MTP5) relative to the initial surface position". Whatever compliance lies under that marker (shoe sole,
+plantar soft tissue) is in the fitted law already, so a shoe pad in series (``hopping_config(pad=...)``, seed 000's
+shoes on a force plate) would count it twice: :func:`unexpected_hard_vs_soft` drops the hopper's ``pad`` option and
+meets seed 001's bare laws (``keep_pad=True``: the pad on both surfaces, session 11's comparison).
 """
 
 from __future__ import annotations
@@ -69,13 +78,22 @@ class SurfaceSurprise:
         }
 
 
-def unexpected_hard_vs_soft(freq_hz: float = 2.2, effects: Effects = Effects(), **options) -> SurfaceSurprise:
+def seed001_options(options: dict, keep_pad: bool = False) -> dict:
+    """The hopper's ``hopping_config`` options on seed 001's surfaces: without its shoe pad unless ``keep_pad``
+    (module docstring: seed 001's laws were fitted at the MTP5 marker, so they hold the sole's compliance)."""
+    return dict(options) if keep_pad else {k: v for k, v in options.items() if k != "pad"}
+
+
+def unexpected_hard_vs_soft(freq_hz: float = 2.2, effects: Effects = Effects(), keep_pad: bool = False,
+                            **options) -> SurfaceSurprise:
     """Calibrate the hop on the soft surface, then simulate its stance on soft and on hard from the same touchdown.
 
     ``options`` are :func:`~hop_impedance.simulation.scenarios.hopping_config`'s keyword options (e.g.
-    :func:`~hop_impedance.simulation.scenarios.seed_like_options`); no hop-to-hop variability.
+    :func:`~hop_impedance.simulation.scenarios.seed_like_options`); no hop-to-hop variability. A ``pad`` among them
+    is dropped (:func:`seed001_options`) unless ``keep_pad``.
     """
-    chain, cfg = hopping_config(freq_hz, "soft", 1, effects, variability=False, **options)
+    chain, cfg = hopping_config(freq_hz, "soft", 1, effects, variability=False,
+                                **seed001_options(options, keep_pad))
     q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
     cal = calibrate(chain, cfg, q)
     if not cal.success:
@@ -83,7 +101,7 @@ def unexpected_hard_vs_soft(freq_hz: float = 2.2, effects: Effects = Effects(), 
                          f"flight {1000 * cal.flight_s:.0f} ms at touchdown speed {cal.speed_m_s:.2f} m/s)")
     law = scale_push_off(cfg.law, cal.push_scale)
     td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
-    pad = cfg.surface.pad if isinstance(cfg.surface, PaddedGround) else None  # a shoe pad stays on both surfaces
+    pad = cfg.surface.pad if isinstance(cfg.surface, PaddedGround) else None  # keep_pad: the pad on both surfaces
     soft, hard = (simulate_stance(chain, law, with_pad(ground, pad), td, friction_coefficient=cfg.friction_coefficient,
                                   trunk_balance=cfg.trunk_balance) for ground in (SOFT, HARD))
 
