@@ -171,3 +171,25 @@ def test_too_soft_joints_collapse_with_a_reason_not_a_crash():
     st = simulate_stance(CHAIN, Eq3Law(k0=10.0), HARD, td, t_max_s=2.0)
     assert st.end_reason == "collapse"
     assert STANCE_FREE.sum() == 5
+
+
+def test_closed_form_equations_of_motion_equal_the_jacobian_sums():
+    """equations_of_motion's closed form (EomConstants) against M = sum m J^T J + diag(I), h = sum m J^T (dJ/dt g'),
+    Q = -g sum m J_z assembled here from the COM Jacobians, at random states of two bodies (the contact at the toe
+    marker and 6 cm ahead of it, which gives the foot's COM a perpendicular offset)."""
+    from hop_impedance.simulation.dynamics import contact_ahead_of_toe_marker
+
+    rng = np.random.default_rng(17)
+    ahead = contact_ahead_of_toe_marker(CHAIN, 0.06)
+    assert abs(ahead.com_perp_m[0]) > 1e-3  # the sine terms of the foot's own COM are exercised
+    for chain in (CHAIN, ahead):
+        for _ in range(50):
+            g, gd = rng.normal(0, 2, 6), rng.normal(0, 5, 6)
+            jac = com_jacobians(chain, g[2:])
+            weighted = chain.mass_kg[:, None, None] * jac
+            mass = np.einsum("iak,ial->kl", weighted, jac)
+            mass[2:, 2:] += np.diag(chain.inertia_kgm2)
+            bias = np.einsum("iak,ia->k", weighted, _velocity_products(chain, g[2:], gd[2:]))
+            gravity = -chain.gravity_m_s2 * weighted[:, 1, :].sum(axis=0)
+            for ours, summed in zip(equations_of_motion(chain, g, gd), (mass, bias, gravity)):
+                np.testing.assert_allclose(ours, summed, rtol=0, atol=1e-12 * np.abs(summed).max())
