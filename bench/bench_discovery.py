@@ -10,7 +10,7 @@ the machine's load than the wall time) and the load average before and after.
 ``--search``: the stiffness gate's search (:data:`hop_impedance.discovery.stiffness_gate.SEARCH`).
 
 Usage: .venv/bin/python bench/bench_discovery.py [--workers N] [--recording REC.mcap]
-       [--search nelder-mead|levenberg-marquardt] [--converge] [--effect-size]
+       [--search nelder-mead|levenberg-marquardt] [--converge] [--effect-size] [--folds K]
 """
 
 from __future__ import annotations
@@ -34,6 +34,8 @@ def main() -> None:
     ap.add_argument("--search", choices=("nelder-mead", "levenberg-marquardt"), default=stiffness_gate.SEARCH)
     ap.add_argument("--converge", action="store_true", help="stiffness_gate.TO_CONVERGENCE (session 10)")
     ap.add_argument("--effect-size", action="store_true", help="stiffness_gate.SHOOT_EFFECT_SIZE (session 10)")
+    ap.add_argument("--folds", type=int, default=stiffness_gate.FOLDS,
+                    help="stiffness_gate.FOLDS: the held-out gate's folds (0: in-sample gate, sessions 8-10)")
     args = ap.parse_args()
     _configure(args)
     if args.recording:
@@ -47,18 +49,20 @@ def main() -> None:
     total, cpu = time.perf_counter() - t0, _cpu_s() - cpu0
     tm = doc["timing"]
     after = [b["seconds"] for b in doc["nuisance"].get("body_mass_split_after_step", [])]
-    searches = [[(name, g["evaluations"], g["converged"], *g["in_sample_gap_regression_shot"], g["effect_factors_shot"],
+    searches = [[(name, g["evaluations"], g["converged"], *gate_gaps(g), g["effect_factors_shot"],
                   g.get("p_value"))
                  for name, g in [("current", st["current"]), *st["candidates"].items()]]
                 for st in doc["selection"]["stiffness_through_simulation"]]
     print(f"recording: {args.recording or '10-hop simulated, angle-dependent stiffness'}; search {args.search}; "
+          f"gate folds {args.folds}; "
           f"stances used {len(doc['stances']['used'])}; effects found: {doc['effects_found']}")
     print(f"discover total: {total:.1f} s (body split search {tm['body_s']:.1f} s, again after each step "
           + (", ".join(f"{b:.1f}" for b in after) or "-") + f" s; baseline held-out runs "
           f"{tm['baseline_s']:.1f} s; rounds " + ", ".join(f"{r:.1f}" for r in tm["rounds"]) + " s; stiffness gate "
           + (", ".join(f"{r:.1f}" for r in tm["stiffness_s"]) or "not needed") + " s)")
-    print("stiffness searches per gate (model, evaluations of all stances, converged, in-sample gap with the "
-          "regression's coefficients and shot, the effect's shot size, the gate's p-value; a current "
+    print("stiffness searches per gate (model, evaluations (of all stances, or of a fold's training stances), "
+          "converged, gap (held out, or in-sample with --folds 0) with the regression's coefficients and shot, "
+          "the effect's shot size, the gate's p-value; a current "
           "model named in the round before reuses that search): " + str(searches))
     print(f"CPU time (this process and its workers): {cpu:.1f} s; load average (1 min) before {load0:.2f}, "
           f"after {os.getloadavg()[0]:.2f}")
@@ -72,6 +76,12 @@ def _configure(args: argparse.Namespace) -> None:
         for name, value in stiffness_gate.TO_CONVERGENCE.items():
             setattr(stiffness_gate, name, value)
     stiffness_gate.SHOOT_EFFECT_SIZE = args.effect_size
+    stiffness_gate.FOLDS = args.folds
+
+
+def gate_gaps(g: dict) -> list[float]:
+    """A gate search's gaps with the regression's and the shot parameters (held out, or in-sample when FOLDS = 0)."""
+    return g.get("held_out_gap_regression_shot") or g["in_sample_gap_regression_shot"]
 
 
 def _cpu_s() -> float:

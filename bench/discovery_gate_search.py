@@ -8,7 +8,7 @@ and CPU time, and per gate and model the evaluations, whether it converged, the 
 regression's and the shot coefficients, the effect's shot size and the gate's p-value.
 
 Usage: .venv/bin/python bench/discovery_gate_search.py [--searches levenberg-marquardt,nelder-mead]
-       [--converge] [--effect-size] [--strict-null-seeds 3,47 [--hops 8]] [REC.mcap ...]
+       [--converge] [--effect-size] [--folds K] [--strict-null-seeds 3,47 [--hops 8]] [REC.mcap ...]
        (no recording: bench_discovery.py's simulated 10-hop angle recording)
 """
 
@@ -19,6 +19,8 @@ import os
 import resource
 import time
 from pathlib import Path
+
+from bench_discovery import gate_gaps
 
 from hop_impedance.discovery import stiffness_gate
 from hop_impedance.discovery.workflow import discover
@@ -35,6 +37,8 @@ def main() -> None:
     ap.add_argument("--effect-size", action="store_true", help="stiffness_gate.SHOOT_EFFECT_SIZE (session 10)")
     ap.add_argument("--strict-null-seeds", default="", help="strict nulls of the second generator instead, e.g. 3,47")
     ap.add_argument("--hops", type=int, default=8, help="hops of a strict null")
+    ap.add_argument("--folds", type=int, default=stiffness_gate.FOLDS,
+                    help="stiffness_gate.FOLDS: the held-out gate's folds (0: in-sample gate, sessions 8-10)")
     args = ap.parse_args()
     _configure(args)
     for name, rec in _recordings(args):
@@ -65,19 +69,20 @@ def _configure(args: argparse.Namespace) -> None:
         for name, value in stiffness_gate.TO_CONVERGENCE.items():
             setattr(stiffness_gate, name, value)
     stiffness_gate.SHOOT_EFFECT_SIZE = args.effect_size
+    stiffness_gate.FOLDS = args.folds
 
 
 def _row(name: str, search: str, rec) -> str:
     load0, cpu0, t0 = os.getloadavg()[0], _cpu_s(), time.perf_counter()
     doc = discover(rec)
     wall, cpu = time.perf_counter() - t0, _cpu_s() - cpu0
-    gates = [[(model, g["evaluations"], g["converged"], *g["in_sample_gap_regression_shot"], g["effect_factors_shot"],
+    gates = [[(model, g["evaluations"], g["converged"], *gate_gaps(g), g["effect_factors_shot"],
                None if g.get("p_value") is None else round(g["p_value"], 5))
               for model, g in [("current", st["current"]), *st["candidates"].items()]]
              for st in doc["selection"]["stiffness_through_simulation"]]
     return (f"{name} | {search}: named {doc['effects_found']}; {wall:.1f} s, CPU {cpu:.1f} s, load "
-            f"{load0:.2f} -> {os.getloadavg()[0]:.2f}\n  gates (model, evaluations, converged, gap regression, "
-            f"gap shot, effect size, p): {gates}")
+            f"{load0:.2f} -> {os.getloadavg()[0]:.2f}, folds {stiffness_gate.FOLDS}\n  gates (model, evaluations, "
+            f"converged, gap regression, gap shot, effect size, p): {gates}")
 
 
 def _cpu_s() -> float:

@@ -271,13 +271,15 @@ class HeldOutEvaluator:
         """Per-stance gap ``G_i`` of the fitted ``spec`` with ``coefs`` on every stance (in-sample, nothing identified)."""
         return np.array([r["gap"] for r in self.stance_residuals(spec, [coefs])[0]])
 
-    def stance_residuals(self, spec: ModelSpec, coef_sets: list[np.ndarray]) -> list[list[dict]]:
-        """In-sample runs of ``spec`` with each of ``coef_sets`` on every stance, all in one pool map.
+    def stance_residuals(self, spec: ModelSpec, coef_sets: list[np.ndarray],
+                         indices: tuple[int, ...] | None = None) -> list[list[dict]]:
+        """Runs of ``spec`` with each of ``coef_sets`` on every stance (or those of ``indices``), in one pool map.
 
         Per coefficient set, per stance: ``gap``, ``samples`` and ``terms`` (:func:`_gap_of`; None if it failed).
         """
-        n = len(self.trial.stances)
-        tasks = [(spec, c, s.index) for c in coef_sets for s in self.trial.stances]
+        stances = [s.index for s in self.trial.stances if indices is None or s.index in indices]
+        n = len(stances)
+        tasks = [(spec, c, i) for c in coef_sets for i in stances]
         pool = self._pool
         out = list(pool.map(_in_sample_one, tasks)) if pool else [_in_sample_one(t) for t in tasks]
         return [out[k * n:(k + 1) * n] for k in range(len(coef_sets))]

@@ -68,6 +68,7 @@ are clean with LM (docs/discovery.md, Runtime); not the default (it loses 1201: 
 from __future__ import annotations
 
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -75,6 +76,7 @@ from scipy.optimize import minimize
 
 from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery.body_nuisance import FAILED_GAP
+from hop_impedance.discovery.identify import identify
 from hop_impedance.discovery.model import JOINT_EFFECTS, ModelSpec, feature_names
 
 #: Largest |log factor| on a joint's regression k0 (a factor of e^1.5 = 4.5 either way).
@@ -86,6 +88,11 @@ EFFECT_FACTOR_BOUNDS = (-1.0, 3.0)
 #: (:func:`_levenberg_marquardt`). Session 10 measured both to convergence: neither is budget-independent AND keeps
 #: the names (module docstring, "Session 10"), so the default is still the lead's session-9 choice.
 SEARCH = "nelder-mead"
+#: The held-out gate (session 11): the stances, in their order, are dealt into FOLDS folds (position k is held out
+#: in fold k % FOLDS); each model's joint law is identified and shot on a fold's training stances and its gap taken
+#: on the held-out ones (:func:`shoot_held_out`). 0: sessions 8-10's in-sample gate (:func:`shoot_stiffness` on all
+#: stances). The choice of K is measured in docs/discovery.md (Runtime, session 11).
+FOLDS = 0
 #: Shoot the effect's size as well as k0 (session 10, the lead's trial; off: it names false effects, see
 #: "Session 10"). Read by :func:`hop_impedance.discovery.workflow._gated`.
 SHOOT_EFFECT_SIZE = False
@@ -135,6 +142,91 @@ class ShotStiffness:
                 "method": self.method}
 
 
+@dataclass(frozen=True)
+class HeldOutShot:
+    """A model shot on each fold's training stances and judged on the stances held out of that fold (session 11).
+
+    ``gaps`` (per stance, in the evaluator's order) is each stance's gap with the parameters of the fold that
+    held it out (the gate compares these); ``gaps_regression`` the same with that fold's regression coefficients.
+    """
+
+    folds: tuple[ShotStiffness, ...]
+    held_out: tuple[tuple[int, ...], ...]
+    gaps: np.ndarray
+    gaps_regression: np.ndarray
+    seconds: float
+
+    @property
+    def evaluations(self) -> int:
+        return sum(f.evaluations for f in self.folds)
+
+    def as_json(self) -> dict:
+        def mean(g: np.ndarray) -> float:
+            return round(float(np.mean(np.minimum(g, FAILED_GAP))), 5)
+
+        return {"gate": f"held-out, {len(self.folds)} folds", "held_out_stances": [list(h) for h in self.held_out],
+                "k0_regression_nm_per_rad": [np.round(f.k0_regression, 2).tolist() for f in self.folds],
+                "k0_shot_nm_per_rad": [np.round(f.k0_regression * f.factors, 2).tolist() for f in self.folds],
+                "effect_terms_shot": list(self.folds[0].effect_terms),
+                "effect_factors_shot": [np.round(f.effect_factors, 3).tolist() for f in self.folds],
+                "held_out_gap_regression_shot": [mean(self.gaps_regression), mean(self.gaps)],
+                "training_gap_shot": [mean(f.gaps) for f in self.folds],
+                "per_stance_gap_shot": np.round(self.gaps, 5).tolist(),
+                "evaluations": self.evaluations, "converged": all(f.converged for f in self.folds),
+                "seconds": round(self.seconds, 2), "method": self.folds[0].method}
+
+
+def fold_indices(indices: list[int], folds: int) -> list[tuple[tuple[int, ...], tuple[int, ...]]]:
+    """(training, held-out) stance indices of each fold: the stance at position k is held out in fold k % folds."""
+    return [(tuple(i for k, i in enumerate(indices) if k % folds != f), tuple(indices[f::folds]))
+            for f in range(folds)]
+
+
+def shoot(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, coefs: np.ndarray, start: ShotStiffness | HeldOutShot | None = None,
+          effect: str | None = None) -> ShotStiffness | HeldOutShot:
+    """The gate's search for one model, as configured here: held out over :data:`FOLDS` folds, or in-sample (0)."""
+    if FOLDS:
+        assert start is None or isinstance(start, HeldOutShot)  # one configuration per run
+        return shoot_held_out(ev, spec_fit, start, effect=effect)
+    assert start is None or isinstance(start, ShotStiffness)
+    return shoot_stiffness(ev, spec_fit, coefs, start, effect=effect)
+
+
+def shoot_held_out(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, start: HeldOutShot | None = None,
+                   method: str | None = None, effect: str | None = None, folds: int | None = None) -> HeldOutShot:
+    """``spec_fit`` (its nonlinear parameters as identified on all stances) judged on held-out stances.
+
+    Per fold (:func:`fold_indices`, ``folds`` or :data:`FOLDS`): the joint-law coefficients are identified on the
+    fold's training stances, k0 (and ``effect``'s size) shot on them (:func:`shoot_stiffness`; ``start``: the
+    current model's search of the same fold), and the held-out stances simulated with the regression's and the
+    shot parameters. So every parameter the gate compares, the candidate's extra ones included, is fitted
+    without the stances it is judged on. (The nonlinear parameters, e.g. the activation's tau or a latency,
+    are those identified on all stances: the held-out test before the gate has already cross-validated them.)
+    """
+    t0, trial = time.perf_counter(), fs.trial_for(spec_fit)
+    order = [s.index for s in ev.trial.stances]
+    split = fold_indices(order, folds or FOLDS)
+
+    def one(f: int) -> tuple[ShotStiffness, _Point, _Point]:
+        train, test = split[f]
+        _, coefs = identify(spec_fit, trial, [s for s in trial.stances if s.index in train])
+        shot = shoot_stiffness(ev, spec_fit, coefs, None if start is None else start.folds[f], method, effect, train)
+        search = _Search(ev, spec_fit, coefs, shot.effect_terms, test)
+        reg, best = search.points([search.regression(), np.r_[np.log(shot.factors), shot.effect_factors]])
+        return shot, reg, best
+
+    # the folds' searches side by side (threads feeding the one process pool): a fold's map of a few training
+    # stances leaves a core idle at its end, two folds' maps fill it
+    with ThreadPoolExecutor(len(split)) as threads:
+        results = list(threads.map(one, range(len(split))))
+    gaps, gaps_reg = np.full(len(order), np.inf), np.full(len(order), np.inf)
+    for (_, test), (_, reg, best) in zip(split, results):
+        pos = [order.index(i) for i in test]
+        gaps[pos], gaps_reg[pos] = best.gaps, reg.gaps
+    return HeldOutShot(tuple(r[0] for r in results), tuple(t for _, t in split), gaps, gaps_reg,
+                       time.perf_counter() - t0)
+
+
 def effect_terms(spec_fit: ModelSpec, effect: str | None) -> tuple[str, ...]:
     """The joint-law terms ``effect`` brings into ``spec_fit`` (none for the baseline or a ground/sensor effect).
 
@@ -170,8 +262,10 @@ class _Search:
     terms at every joint (the effect's size; its joint pattern stays the regression's).
     """
 
-    def __init__(self, ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, coefs: np.ndarray, terms: tuple[str, ...]):
+    def __init__(self, ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, coefs: np.ndarray, terms: tuple[str, ...],
+                 indices: tuple[int, ...] | None = None):
         self.ev, self.spec, self.coefs, self.terms = ev, spec_fit, np.array(coefs, float), terms
+        self.indices = indices  # the stances simulated (None: all)
         names = feature_names(spec_fit)
         self.col, self.term_cols = names.index("k0"), [names.index(t) for t in terms]
         n = 4 if terms else 3
@@ -190,7 +284,7 @@ class _Search:
         """Every stance at each of ``xs`` (clipped to the bounds); the new ones in one pool map."""
         xs = [np.clip(x, self.lower, self.upper) for x in xs]
         new = list({tuple(np.round(x, 6)): x for x in xs if tuple(np.round(x, 6)) not in self.seen}.items())
-        runs = self.ev.stance_residuals(self.spec, [self._coefs(x) for _, x in new]) if new else []
+        runs = self.ev.stance_residuals(self.spec, [self._coefs(x) for _, x in new], self.indices) if new else []
         for (key, x), r in zip(new, runs):
             self.seen[key] = _Point(x, r)
         return [self.seen[tuple(np.round(x, 6))] for x in xs]
@@ -205,7 +299,7 @@ class _Search:
 
 def shoot_stiffness(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, coefs: np.ndarray,
                     start: ShotStiffness | None = None, method: str | None = None,
-                    effect: str | None = None) -> ShotStiffness:
+                    effect: str | None = None, indices: tuple[int, ...] | None = None) -> ShotStiffness:
     """``spec_fit`` (identified on all stances, coefficients ``coefs``) with k0 and ``effect``'s own terms
     chosen by the simulation.
 
@@ -216,10 +310,10 @@ def shoot_stiffness(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, coefs: np.ndar
     current model itself when it is the baseline). The search starts from the best of these and the
     regression.
     ``method``: :data:`SEARCH` by default; Levenberg-Marquardt falls back to Nelder-Mead when a stance fails
-    to simulate at the start (no residuals to linearise).
+    to simulate at the start (no residuals to linearise). ``indices``: the stances shot on (None: all).
     """
     t0 = time.perf_counter()
-    search = _Search(ev, spec_fit, coefs, effect_terms(spec_fit, effect))
+    search = _Search(ev, spec_fit, coefs, effect_terms(spec_fit, effect), indices)
     starts = [search.regression()]
     if start is not None and not search.terms:  # session 9: the current model's factors on this model's k0
         starts.append(np.log(start.factors))
@@ -329,8 +423,10 @@ class _Linearisation:
                                for run, m, w in zip(p.runs, self.m, self.w)])
 
 
-def gate(cand: ShotStiffness, current: ShotStiffness, n_candidates: int) -> dict:
-    """Does the candidate beat the current model, both with k0 chosen through the simulation (module docstring)?"""
+def gate(cand: ShotStiffness | HeldOutShot, current: ShotStiffness | HeldOutShot, n_candidates: int) -> dict:
+    """Does the candidate beat the current model, both with k0 chosen through the simulation (module docstring)?
+
+    Held out (:class:`HeldOutShot`): on each stance's gap with the parameters of the fold that held it out."""
     d, shrink, p = fs.compare_gaps(current.gaps, cand.gaps)
     return {"passes": fs.significant(p, shrink, n_candidates), "p_value": p,
             "shrink_against_shot": shrink, "per_stance_log_gap_ratio": np.round(d, 4).tolist(), **cand.as_json()}

@@ -20,7 +20,7 @@ from hop_impedance.discovery.body_nuisance import choose_body
 from hop_impedance.discovery.identify import SIGNALS, core, identify, residuals
 from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
 from hop_impedance.discovery.model import ModelSpec, feature_names
-from hop_impedance.discovery.stiffness_gate import gate, shoot_stiffness
+from hop_impedance.discovery.stiffness_gate import gate, shoot
 from hop_impedance.recording import Recording
 
 SCHEMA = "hop_impedance.discover/1"
@@ -207,7 +207,8 @@ def _gated(ev: fs.HeldOutEvaluator, fitted: tuple[ModelSpec, np.ndarray], scores
     candidate in the order of its mean log gap ratio until one beats the current model so
     (:mod:`hop_impedance.discovery.stiffness_gate`); the figures go to ``selection.stiffness_through_simulation``,
     the searches' time to ``timing.stiffness_s``. With ``stiffness_gate.SHOOT_EFFECT_SIZE`` (session 10's
-    trial, off) also the size of the effect each adds. ``shots`` keeps every search by model: the candidate
+    trial, off) also the size of the effect each adds; ``stiffness_gate.FOLDS``: shot on training folds and
+    compared on the held-out stances (session 11), or in-sample (0). ``shots`` keeps every search by model: the candidate
     named in one round is the next round's current model (same
     body split: same model and coefficients), whose search is then not repeated.
     """
@@ -217,12 +218,12 @@ def _gated(ev: fs.HeldOutEvaluator, fitted: tuple[ModelSpec, np.ndarray], scores
     t0 = time.perf_counter()
     sized = stiffness_gate.SHOOT_EFFECT_SIZE
     last = fitted[0].effects[-1] if fitted[0].effects and sized else None
-    shot = shots.get(_model_key(*fitted)) or shoot_stiffness(ev, *fitted, effect=last)
+    shot = shots.get(_model_key(*fitted)) or shoot(ev, *fitted, effect=last)
     gates: dict = {}
     for sc in ok:
         trial = fs.trial_for(sc.runs.spec)
         cand = identify(sc.runs.spec, trial, trial.stances)
-        shots[_model_key(*cand)] = shoot_stiffness(ev, *cand, shot, effect=sc.effect if sized else None)
+        shots[_model_key(*cand)] = shoot(ev, *cand, shot, effect=sc.effect if sized else None)
         gates[sc.effect] = gate(shots[_model_key(*cand)], shot, n_candidates)
         if gates[sc.effect]["passes"]:
             break
