@@ -16,6 +16,8 @@ changed, the same at every frequency (no per-frequency tuning):
   (the seed's push = brake energies, its Table 1);
 - ``preload_A_K``: a touchdown moment m0 (N m, ankle, knee; Eq3Law.m0, the seed's Eq. 3 integration constant
   M_s0, which the per-stance fit's intercept absorbs): the springs rest more extended than the landing angle;
+- ``trunk_balance_K_B``: the trunk balance's stiffness and damping (default 800 N m/rad, 40 N m s/rad; e.g. a
+  balance that acts more on the trunk's pitch rate, so that it holds the hip more in the faster stances);
 - ``trunk_rising_K``: touchdown hip flexed 0.10 rad more (trunk leaning further forward) with the trunk balance
   K N m/rad referenced to the candidate's touchdown trunk angle, so the trunk rises on the hip in stance.
 
@@ -78,6 +80,8 @@ def variant_config(name: str, freq_hz: float):
         pass  # the push-off part is replaced below
     elif kind == "push":
         options["push_timing"] = tuple(values)
+    elif name.startswith("trunk_balance_"):
+        options["trunk_balance"] = TrunkBalance(values[0], values[1])
     elif kind == "trunk":
         chain, _ = hopping_config(freq_hz, "rigid", 1, variability=False, **options)
         reference = float(touchdown_posture(chain, np.array(SEED_LIKE_TOUCHDOWN_RHO))[3])

@@ -60,3 +60,27 @@ def test_three_cells_out_pass_unless_one_is_stance_grf_or_ankle(issue17):
         assert len(out) == 1 and not rows[-1].passed, forbidden
     rows, out = issue17.realism_rows(measures(issue17, {**allowed, ("rom", 1.53, 2): 0.5}))
     assert len(out) == 4 and not rows[-1].passed
+
+
+def test_bell_shape_failure_names_the_edge_or_the_sign(issue17):
+    """K(t) = 300 + 200 sin^2(pi t): a bell with non-zero edges; rising to take-off: maximum at the edge; a bell
+    whose take-off edge goes negative: the sign."""
+    t = np.linspace(0.0, 1.0, 101)
+    assert issue17.bell_shape_failure(300.0 + 200.0 * np.sin(np.pi * t) ** 2) == ""
+    assert issue17.bell_shape_failure(300.0 + 200.0 * t).startswith("maximum at the take-off edge")
+    why = issue17.bell_shape_failure(300.0 * np.sin(np.pi * t) ** 2 + 100.0 - 150.0 * t)
+    assert why.startswith("K <= 0 at an edge") and "take-off -50" in why
+
+
+def test_fig7_diagnosis_names_the_point_off_the_line(issue17):
+    """Nine points on y = 2 x except the knee at 1.87 Hz: its r^2 without it is 1, every other's below 1."""
+    ms = {}
+    for f in issue17.FREQS:
+        k = {j: (100.0 * (i + 1) * f, 200.0 * (i + 1) * f) for i, j in enumerate(issue17.JOINTS)}
+        if f == 1.87:
+            k["knee"] = (k["knee"][0], 3.0 * k["knee"][1])
+        ms[f] = issue17.FrequencyMeasure({}, {}, np.zeros((2, 3)), {}, {}, k)
+    lines = issue17.diagnosis(ms)
+    without = {ln.split(":")[0].strip(): float(ln.rsplit(" ", 1)[1]) for ln in lines[1:10]}
+    assert without["knee 1.87 Hz"] == pytest.approx(1.0)
+    assert all(v < 0.99 for k, v in without.items() if k != "knee 1.87 Hz")
