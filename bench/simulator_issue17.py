@@ -112,10 +112,27 @@ BELL09_RIGID_PAD15_3_PUSH06_08_LAW_SCALE = {
     1.87: ((0.952543, 0.99313, 1.0), (1.017727, 0.969349, 1.0)),
     2.2: ((0.937365, 0.990202, 1.0), (1.042103, 0.975221, 1.0)),
 }
+#: The same with ``--trunk 400,80`` too (session 12: ``bench/simulator_issue17_search.py --a-min 0.9 --surface rigid
+#: --pad 15,3 --push-timing 0.6,0.8 --trunk 400,80``, 128 s at load 2.4-2.9; calibration worst 6.9 / 3.0 / 6.0 %).
+BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK400_80_LAW_SCALE = {
+    1.53: ((0.98742, 0.931208, 1.0), (0.989755, 1.16041, 1.0)),
+    1.87: ((0.91021, 1.175694, 1.0), (1.034675, 0.592375, 1.0)),
+    2.2: ((0.856853, 1.212848, 1.0), (1.078409, 0.564144, 1.0)),
+}
+#: a_min 0.9, ``--surface rigid --pad 15,3 --push-timing 0.6,0.8 --trunk 500,60``, calibrated on 10-hop trials like
+#: the criteria's (session 12: ``bench/simulator_issue17_search.py --a-min 0.9 --surface rigid --pad 15,3 --push-timing
+#: 0.6,0.8 --trunk 500,60 --hops 10``, 117 s at load 2.5-3; calibration worst 7.0 / 8.7 / 7.4 %; 1.87 Hz: Table 2).
+BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK500_60_LAW_SCALE = {
+    1.53: ((0.951063, 0.887117, 1.0), (1.070895, 1.292072, 1.0)),
+    1.87: ((1.0, 1.0, 1.0), (1.0, 1.0, 1.0)),
+    2.2: ((0.942668, 0.999863, 1.0), (1.037431, 0.952664, 1.0)),
+}
 LAW_SCALES = {"none": None, "seed_like": SEED_LIKE_LAW_SCALE, "bell09": BELL09_LAW_SCALE,
               "bell09_rigid_pad10": BELL09_RIGID_PAD10_LAW_SCALE, "bell09_rigid_pad15_3": BELL09_RIGID_PAD15_3_LAW_SCALE,
               "bell08_rigid_pad15_3": BELL08_RIGID_PAD15_3_LAW_SCALE,
-              "bell09_rigid_pad15_3_push06_08": BELL09_RIGID_PAD15_3_PUSH06_08_LAW_SCALE}
+              "bell09_rigid_pad15_3_push06_08": BELL09_RIGID_PAD15_3_PUSH06_08_LAW_SCALE,
+              "bell09_rigid_pad15_3_push06_08_trunk400_80": BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK400_80_LAW_SCALE,
+              "bell09_rigid_pad15_3_push06_08_trunk500_60": BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK500_60_LAW_SCALE}
 
 
 @dataclass

@@ -32,17 +32,21 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simulator_issue17 import FORBIDDEN_OUT, criteria, realism_rows  # noqa: E402  (a bench next to this one)
 
 from hop_impedance.simulation.fit_calibration import calibrate_law_scale, table2_k, worst_deviation  # noqa: E402
+from hop_impedance.simulation.impedance_laws import TrunkBalance  # noqa: E402
 from hop_impedance.simulation.scenarios import seed_like_options, shoe_pad  # noqa: E402
 
 FREQS = (1.53, 1.87, 2.2)
 
 
-def options_for(a_min: float, pad: str | None = None, push_timing: str | None = None) -> dict:
+def options_for(a_min: float, pad: str | None = None, push_timing: str | None = None, trunk: str | None = None) -> dict:
     """seed_like_options with the bell's floor a_min (1: no bell), a shoe pad ``"MM,N"`` (None: none) and the
-    push-off's ``"ONSET,DURATION"`` (fractions of the passive stance; None: seed_like_options')."""
+    push-off's ``"ONSET,DURATION"`` (fractions of the passive stance; None: seed_like_options') and the trunk
+    balance's ``"K,B"`` (N m/rad, N m s/rad; None: seed_like_options' 800, 40)."""
     options = {**seed_like_options(), "bell_activation_min": None if a_min >= 1.0 else a_min}
     if push_timing:
         options["push_timing"] = tuple(float(v) for v in push_timing.split(","))
+    if trunk:
+        options["trunk_balance"] = TrunkBalance(*(float(v) for v in trunk.split(",")))
     if pad:
         mm, exponent = (float(v) for v in pad.split(","))
         options["pad"] = shoe_pad(mm / 1000.0, exponent)
@@ -50,14 +54,14 @@ def options_for(a_min: float, pad: str | None = None, push_timing: str | None = 
 
 
 def search_one(a_min: float, iterations: int, tolerance: float, surface: str = "hard", pad: str | None = None,
-               push_timing: str | None = None) -> dict:
+               push_timing: str | None = None, trunk: str | None = None, hops: int = 6) -> dict:
     """Calibrate the law at every frequency for this a_min, then measure issue 17's criteria with it."""
-    options = options_for(a_min, pad, push_timing)
+    options = options_for(a_min, pad, push_timing, trunk)
     scales, calibration_dev, notes = {}, {}, []
     for f in FREQS:
         t0 = time.perf_counter()
         errors: list[str] = []
-        cal = calibrate_law_scale(f, options, iterations=iterations, tolerance=tolerance, surface=surface,
+        cal = calibrate_law_scale(f, options, n_hops=hops, iterations=iterations, tolerance=tolerance, surface=surface,
                                   on_step=lambda _scale, _fitted, error, sink=errors: sink.append(error) if error else None)
         scales[f] = np.round(cal.scale, 6)
         calibration_dev[f] = worst_deviation(cal.fitted, table2_k(f))
@@ -95,14 +99,19 @@ def main() -> None:
     parser.add_argument("--pad", metavar="MM,N", help="a shoe pad in series: MM mm at 3 body weights, exponent N")
     parser.add_argument("--push-timing", metavar="ONSET,DURATION",
                         help="push-off onset and duration as fractions of the passive stance (default 0.5,0.5)")
+    parser.add_argument("--hops", type=int, default=6,
+                        help="hops of the calibration's trials (default 6; the criteria's trials have 10)")
+    parser.add_argument("--trunk", metavar="K,B", help="trunk-balance stiffness and damping instead of 800,40")
     args = parser.parse_args()
-    header = ("| a_min | calibration: worst ankle/knee fit deviation at 1.53 / 1.87 / 2.2 Hz (%, 6 hops) | the same in "
-              "the 10-hop criteria trials (%) | worst (%) | binding Table 1 cells out | which | issue 17 rows passed |\n"
+    header = (f"| a_min | calibration: worst ankle/knee fit deviation at 1.53 / 1.87 / 2.2 Hz (%, {args.hops} hops) | "
+              "the same in the 10-hop criteria trials (%) | worst (%) | binding Table 1 cells out | which | "
+              "issue 17 rows passed |\n"
               "|---|---|---|---|---|---|---|")
     results = []
     for a_min in (float(v) for v in args.a_min.split(",")):
         t0 = time.perf_counter()
-        r = search_one(a_min, args.iterations, args.tolerance, args.surface, args.pad, args.push_timing)
+        r = search_one(a_min, args.iterations, args.tolerance, args.surface, args.pad, args.push_timing, args.trunk,
+                       args.hops)
         results.append(r)
         print(f"a_min {a_min:g} ({time.perf_counter() - t0:.0f} s):")
         for n in r["notes"]:
