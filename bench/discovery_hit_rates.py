@@ -33,6 +33,8 @@ Prints one line per run and the table (markdown) at the end.
 ``--scheduler local`` (the embedded cluster of ``hop-impedance batch``) or ``--scheduler tcp://HOST:8786``
 runs one Dask task per case and seed through :func:`hop_impedance.batch.runner.cluster_map`, discovery
 with one process per task; the lines of each run print in the serial order once all are back.
+``--gate-folds K [--gate-search levenberg-marquardt] [--gate-converge]``: the stiffness gate's session-11 option
+(held out over K folds) and its search, set in this process, so only without ``--scheduler``.
 """
 
 from __future__ import annotations
@@ -126,7 +128,11 @@ def main() -> None:
                     help="one Dask task per case and seed (simulator and second-generator cases): 'local' for the "
                          "embedded cluster of hop-impedance batch, or tcp://HOST:8786; discovery uses one process "
                          "per task")
+    ap.add_argument("--gate-folds", type=int, default=None, help="stiffness_gate.FOLDS (held-out gate; no --scheduler)")
+    ap.add_argument("--gate-search", choices=("nelder-mead", "levenberg-marquardt"), default=None)
+    ap.add_argument("--gate-converge", action="store_true", help="stiffness_gate.TO_CONVERGENCE")
     args = ap.parse_args()
+    _configure_gate(ap, args)
     sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})
     freqs = tuple(float(f) for f in args.freqs.split(",") if f) or None
     calls = [("simulator", name, seed, args.hops, sizes, freqs)
@@ -151,6 +157,23 @@ def main() -> None:
     if args.foreign:
         rows += foreign_rows(args.foreign)
     print_table(rows)
+
+
+def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """The stiffness gate's options, set in this process (a Dask worker would not see them)."""
+    if args.gate_folds is None and args.gate_search is None and not args.gate_converge:
+        return
+    if args.scheduler:
+        ap.error("--gate-* options set the gate in this process: run without --scheduler")
+    from hop_impedance.discovery import stiffness_gate
+
+    if args.gate_folds is not None:
+        stiffness_gate.FOLDS = args.gate_folds
+    if args.gate_search:
+        stiffness_gate.SEARCH = args.gate_search
+    if args.gate_converge:
+        for name, value in stiffness_gate.TO_CONVERGENCE.items():
+            setattr(stiffness_gate, name, value)
 
 
 def case_run(source: str, name: str, seed: int, hops: int, sizes: EffectSizes, freqs,

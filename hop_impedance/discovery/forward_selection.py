@@ -114,8 +114,9 @@ class HeldOutRuns:
         """Pooled held-out gap: ``total`` (mean G_i, first key) then per-signal RMS (and RMS / scale) and duration."""
         out: dict[str, Any] = {"total": float(np.mean(self.gaps))}  # a JSON document
         for k, sig in enumerate(GAP_SIGNALS):
-            rms = float(np.sqrt(np.nanmean(self.rms[:, k] ** 2)))
-            out[sig] = {"rms": rms, "relative_rms": rms / float(scales[k])}
+            ms = simulated_mean(self.rms[:, k] ** 2)
+            rms = None if ms is None else float(np.sqrt(ms))
+            out[sig] = {"rms": rms, "relative_rms": None if rms is None else rms / float(scales[k])}
         d = self.duration_error_s[np.isfinite(self.duration_error_s)]
         out["duration_error_rms_s"] = float(np.sqrt(np.mean(d**2))) if d.size else None
         out["stances_not_taking_off"] = int(sum(r != "take_off" for r in self.end_reasons))
@@ -329,6 +330,14 @@ def one_sided_t(d: np.ndarray) -> float:
     return float(stats.ttest_1samp(d, 0.0, alternative="greater").pvalue)
 
 
+def simulated_mean(x: np.ndarray) -> float | None:
+    """Mean over the stances that simulated (NaN marks one that failed or was lost when re-measured); None if
+    none did. Seen on ``surface_compliance+active_push_off_1501``: a candidate whose every held-out stance
+    failed, where ``np.nanmean`` warned "Mean of empty slice" and gave NaN."""
+    ok = np.isfinite(x)
+    return float(np.mean(x[ok])) if ok.any() else None
+
+
 def physics_evidence(trial: MeasuredTrial, current: HeldOutRuns, cand: HeldOutRuns) -> dict:
     """Energy balance, stance-to-stance variation, flight force and latency of one candidate."""
     w_meas = np.array([measured_net_work_j(s) for s in trial.stances])
@@ -339,10 +348,10 @@ def physics_evidence(trial: MeasuredTrial, current: HeldOutRuns, cand: HeldOutRu
     return {
         "measured_net_joint_work_j": {"mean": float(w_meas.mean()), "se": se, "per_stance": w_meas.round(2).tolist(),
                                       "p_positive": one_sided_t(w_meas)},
-        "simulated_net_joint_work_j": {"mean": float(np.nanmean(cand.net_work_j)),
+        "simulated_net_joint_work_j": {"mean": simulated_mean(cand.net_work_j),
                                        "per_stance": np.round(cand.net_work_j, 2).tolist()},
-        "work_mismatch_j": {"candidate": float(np.nanmean(np.abs(cand.net_work_j - w_meas))),
-                            "current": float(np.nanmean(np.abs(current.net_work_j - w_meas)))},
+        "work_mismatch_j": {"candidate": simulated_mean(np.abs(cand.net_work_j - w_meas)),
+                            "current": simulated_mean(np.abs(current.net_work_j - w_meas))},
         "per_stance_gap_current": np.round(current.gaps, 5).tolist(),
         "per_stance_gap_candidate": np.round(cand.gaps, 5).tolist(),
         "stance_to_stance_cv_of_gap_ratio": float(np.std(cand.gaps / current.gaps) / np.mean(cand.gaps / current.gaps))
@@ -373,7 +382,9 @@ def admissible(effect: str, physics: dict) -> tuple[bool, str]:
                            f"is not positive (p = {p:.2f}): no energy for a push-off to add")
     if effect in ("joint_damping", "active_push_off"):
         mis = physics["work_mismatch_j"]
-        if not mis["candidate"] < mis["current"]:
+        if mis["candidate"] is None:
+            return False, "no held-out stance simulated with it: no energy balance to compare"
+        if mis["current"] is not None and not mis["candidate"] < mis["current"]:
             return False, (f"does not improve the energy balance: net-work mismatch {mis['candidate']:.2f} J "
                            f"vs {mis['current']:.2f} J without it")
     return True, ""
