@@ -16,6 +16,8 @@ changed, the same at every frequency (no per-frequency tuning):
   (the seed's push = brake energies, its Table 1);
 - ``preload_A_K``: a touchdown moment m0 (N m, ankle, knee; Eq3Law.m0, the seed's Eq. 3 integration constant
   M_s0, which the per-stance fit's intercept absorbs): the springs rest more extended than the landing angle;
+- ``late_A_K_H``: session 12's variant (push-off from 0.6 for 0.8 of the passive stance, trunk balance 500 / 60)
+  with the push-off's shares A, K, H per joint (e.g. 1, 0, 0.3: the take-off extension carried by the ankle);
 - ``trunk_balance_K_B``: the trunk balance's stiffness and damping (default 800 N m/rad, 40 N m s/rad; e.g. a
   balance that acts more on the trunk's pitch rate, so that it holds the hip more in the faster stances);
 - ``trunk_rising_K``: touchdown hip flexed 0.10 rad more (trunk leaning further forward) with the trunk balance
@@ -78,6 +80,8 @@ def variant_config(name: str, freq_hz: float):
     values = [float(v) for v in name.split("_") if v.replace(".", "", 1).isdigit()]
     if name.startswith("push_weights_"):
         pass  # the push-off part is replaced below
+    elif kind == "late":
+        options["push_timing"], options["trunk_balance"] = (0.6, 0.8), TrunkBalance(500.0, 60.0)
     elif kind == "push":
         options["push_timing"] = tuple(values)
     elif name.startswith("trunk_balance_"):
@@ -91,7 +95,7 @@ def variant_config(name: str, freq_hz: float):
     chain, cfg = hopping_config(freq_hz, "rigid", 5, variability=False, **options)
     law = cfg.law
     assert isinstance(law, CompositeLaw)  # hopping_config's law: Eq. 3 and the push-off
-    if name.startswith("push_weights_"):
+    if name.startswith("push_weights_") or kind == "late":
         push = push_off_part(law)
         assert push is not None
         law = law.replace_part(push, PushOff(PUSH_OFF_BASE_NM * np.array(values), push.onset_s, push.duration_s))
@@ -108,9 +112,9 @@ def measure(name: str, freq_hz: float) -> str:
         chain, cfg = variant_config(name, freq_hz)
         trial = simulate_hopping(chain, cfg, seed=1)
     except ValueError as exc:
-        return f"| {name} | {freq_hz:g} | no hop: {exc} |" + " |" * 9
+        return f"| {name} | {freq_hz:g} | no hop: {exc} |" + " |" * 10
     if len(trial.stances) < 3:
-        return f"| {name} | {freq_hz:g} | stopped: {trial.stop_reason} |" + " |" * 9
+        return f"| {name} | {freq_hz:g} | stopped: {trial.stop_reason} |" + " |" * 10
     rec = trial.stances[2]
     st = rec.stance
     hip = joint_positions(chain, st.g)[:, 3, 1]
@@ -133,7 +137,8 @@ def measure(name: str, freq_hz: float) -> str:
             f"{1000 * (hip[-1] - hip[0]):+.1f} | {drop:.3f} | {excursion / drop:.2f} | "
             + " / ".join(f"{r:.2f} ({dev(r, s)})" for r, s in zip(rom, seed["rom"])) + " | "
             + " / ".join(f"{b:.1f}" for b in brake) + " | " + " / ".join(f"{w:.1f}" for w in push_w) + " | "
-            f"{st.g[-1, 5] - st.g[0, 5]:+.3f} |")
+            f"{st.g[-1, 5] - st.g[0, 5]:+.3f} | "
+            + " / ".join(f"{d:+.3f}" for d in st.rho_rad[-1] - st.rho_rad[0]) + " |")
 
 
 def main() -> None:
@@ -144,8 +149,9 @@ def main() -> None:
     freqs = [f for f in SEED_TABLE1 if f in {float(v) for v in args.freqs.split(",")}]
     print("| variant | f (Hz) | stance ms (vs seed) | peak GRF BW | hip joint range in stance m | hip take-off minus "
           "touchdown mm | COM drop m | hip range / COM drop | range of flexion ankle / knee / hip rad | brake J "
-          "ankle / knee / hip | push-off work J | trunk pitch take-off minus touchdown rad |\n"
-          "|---|---|---|---|---|---|---|---|---|---|---|---|", flush=True)
+          "ankle / knee / hip | push-off work J | trunk pitch take-off minus touchdown rad | "
+          "joint angles take-off minus touchdown, ankle / knee / hip rad (flexion +) |\n"
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|", flush=True)
     t0 = time.perf_counter()
     for name in args.variants.split(","):
         for f in freqs:
