@@ -381,6 +381,7 @@ def main() -> None:
     parser.add_argument("--contact-ahead", type=float, default=None, metavar="M",
                         help="ground contact this far ahead of the toe marker (m) instead of the toe tip's")
     parser.add_argument("--freqs", default=",".join(f"{f:g}" for f in FREQS), help="a subset of 1.53,1.87,2.2")
+    parser.add_argument("--seed", type=int, default=1, help="the trials' seed (hop-to-hop variability; default 1)")
     parser.add_argument("--no-seed001", action="store_true", help="leave seed 001's rows out (quicker)")
     parser.add_argument("--seed001-keep-pad", action="store_true",
                         help="seed 001's rows with the --pad in series with its laws (session 11; default: its bare "
@@ -389,7 +390,7 @@ def main() -> None:
     args = parser.parse_args()
     freqs = tuple(f for f in FREQS if f in floats(args.freqs))
     variant = any((args.bell is not None, args.law_scale != "none", args.surface != "hard", args.pad, args.posture,
-                   args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS, args.no_seed001))
+                   args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS, args.no_seed001, args.seed != 1))
     if args.write and variant:
         parser.error("--write stores seed_like_options' table only")
     try:
@@ -398,7 +399,7 @@ def main() -> None:
         parser.error(str(exc))
     t0 = time.perf_counter()
     try:
-        rows, measures = criteria(options, surface=args.surface, freqs=freqs, seed001=not args.no_seed001,
+        rows, measures = criteria(options, seed=args.seed, surface=args.surface, freqs=freqs, seed001=not args.no_seed001,
                                   seed001_keep_pad=args.seed001_keep_pad)
     except ValueError as exc:  # e.g. a variant with which no periodic hop exists: one line, no traceback
         sys.exit(f"simulator_issue17: {setup}: no table: {exc}")
@@ -406,6 +407,7 @@ def main() -> None:
     print(text)
     print(force_shape(measures))
     print("\n".join(diagnosis(measures)))
+    setup += f", seed {args.seed}" if args.seed != 1 else ""
     print(f"({setup}; {sum(r.passed for r in rows)} of {len(rows)} rows pass; measured in {time.perf_counter() - t0:.0f} s)")
     if args.write:
         replace_between_markers(ROOT / "docs" / "simulator.md", BEGIN, END,
