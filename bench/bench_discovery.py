@@ -10,7 +10,7 @@ the machine's load than the wall time) and the load average before and after.
 ``--search``: the stiffness gate's search (:data:`hop_impedance.discovery.stiffness_gate.SEARCH`).
 
 Usage: .venv/bin/python bench/bench_discovery.py [--workers N] [--recording REC.mcap]
-       [--search nelder-mead|levenberg-marquardt] [--converge] [--effect-size] [--folds K]
+       [--search nelder-mead|levenberg-marquardt] [--converge | --budget] [--effect-size] [--folds K]
 """
 
 from __future__ import annotations
@@ -32,7 +32,10 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=None)
     ap.add_argument("--recording", default="", help="an MCAP recording instead of the simulated 10-hop one")
     ap.add_argument("--search", choices=("nelder-mead", "levenberg-marquardt"), default=stiffness_gate.SEARCH)
-    ap.add_argument("--converge", action="store_true", help="stiffness_gate.TO_CONVERGENCE (session 10)")
+    ap.add_argument("--converge", action="store_true",
+                    help="stiffness_gate.TO_CONVERGENCE (session 10; the default since session 12)")
+    ap.add_argument("--budget", action="store_true",
+                    help="stiffness_gate.SESSION9_BUDGET: the evaluation caps decide (the default of sessions 8-11)")
     ap.add_argument("--effect-size", action="store_true", help="stiffness_gate.SHOOT_EFFECT_SIZE (session 10)")
     ap.add_argument("--folds", type=int, default=stiffness_gate.FOLDS,
                     help="stiffness_gate.FOLDS: the held-out gate's folds (0: in-sample gate, sessions 8-10)")
@@ -72,6 +75,9 @@ def main() -> None:
 def _configure(args: argparse.Namespace) -> None:
     """The gate's search and its session-10 options (stiffness_gate.TO_CONVERGENCE, SHOOT_EFFECT_SIZE)."""
     stiffness_gate.SEARCH = args.search
+    if args.budget:
+        for name, value in stiffness_gate.SESSION9_BUDGET.items():
+            setattr(stiffness_gate, name, value)
     if args.converge:
         for name, value in stiffness_gate.TO_CONVERGENCE.items():
             setattr(stiffness_gate, name, value)

@@ -8,7 +8,7 @@ and CPU time, and per gate and model the evaluations, whether it converged, the 
 regression's and the shot coefficients, the effect's shot size and the gate's p-value.
 
 Usage: .venv/bin/python bench/discovery_gate_search.py [--searches levenberg-marquardt,nelder-mead]
-       [--converge] [--effect-size] [--folds K] [--strict-null-seeds 3,47 [--hops 8]] [REC.mcap ...]
+       [--converge | --budget] [--effect-size] [--folds K] [--strict-null-seeds 3,47 [--hops 8]] [REC.mcap ...]
        (no recording: bench_discovery.py's simulated 10-hop angle recording)
 """
 
@@ -33,7 +33,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("recordings", nargs="*")
     ap.add_argument("--searches", default="levenberg-marquardt,nelder-mead")
-    ap.add_argument("--converge", action="store_true", help="stiffness_gate.TO_CONVERGENCE (session 10)")
+    ap.add_argument("--converge", action="store_true",
+                    help="stiffness_gate.TO_CONVERGENCE (session 10; the default since session 12)")
+    ap.add_argument("--budget", action="store_true",
+                    help="stiffness_gate.SESSION9_BUDGET: the evaluation caps decide (the default of sessions 8-11)")
     ap.add_argument("--effect-size", action="store_true", help="stiffness_gate.SHOOT_EFFECT_SIZE (session 10)")
     ap.add_argument("--strict-null-seeds", default="", help="strict nulls of the second generator instead, e.g. 3,47")
     ap.add_argument("--hops", type=int, default=8, help="hops of a strict null")
@@ -65,6 +68,9 @@ def _recordings(args: argparse.Namespace):
 
 def _configure(args: argparse.Namespace) -> None:
     """The gate's session-10 options: searches to convergence, the candidate's effect size shot too."""
+    if args.budget:
+        for name, value in stiffness_gate.SESSION9_BUDGET.items():
+            setattr(stiffness_gate, name, value)
     if args.converge:
         for name, value in stiffness_gate.TO_CONVERGENCE.items():
             setattr(stiffness_gate, name, value)

@@ -54,7 +54,7 @@ per joint (tried first) the constant-law strict null seed 43 named the angle law
 The gate compares in-sample gaps, and each parameter only the candidate gets in-sample is one the t-test does
 not pay for.
 
-Session 11, the held-out gate (:data:`FOLDS`, :func:`shoot_held_out`; an option, NOT the default): each model is
+Session 11, the held-out gate (:data:`FOLDS`, :func:`shoot_held_out`; the default since session 12): each model is
 identified and shot on a fold's training stances and judged on the stances held out of that fold, so every
 parameter the candidate adds (its regression coefficients, its shot k0, its shot size) is fitted without the
 stances it is judged on. Measured (docs/discovery.md, Runtime, session 11; ``bench/discovery_gate_search.py
@@ -75,13 +75,17 @@ surface law) are those identified on all stances: the held-out test before the g
 Search: ``method="levenberg-marquardt"`` (:func:`_levenberg_marquardt`: the gap is a sum of squares,
 :func:`hop_impedance.discovery.forward_selection._gap_of`; forward-difference Jacobian, its columns in one
 pool map) converges further in fewer simulations than Nelder-Mead (session 9: baseline 0.0700 -> 0.0133 in 13
-evaluations against 0.0191 in 20 on the bench recording); it is not the default because on 1201 its k0-only
-gate names nothing (constant model 0.0082, angle law 0.0057, p = 0.056), while Nelder-Mead stopped at 20
-evaluations leaves the constant model at 0.018 and names the angle law: the outcome depends on the budget,
-which session 10's options do not remove either (above). k0 only with :data:`TO_CONVERGENCE` is the one
-configuration measured budget-independent: both searches name the angle law on the bench recording and
-nothing on 1201 (p 0.0075 / 0.021: session 9's LM p of 0.056 was its budget), and strict nulls 3 and 47
-are clean with LM (docs/discovery.md, Runtime); not the default (it loses 1201: the lead's call)."""
+evaluations against 0.0191 in 20 on the bench recording). In sessions 9-11 it was not the default because on
+1201 its k0-only gate named nothing (constant model 0.0082, angle law 0.0057, p = 0.056), while Nelder-Mead
+stopped at 20 evaluations left the constant model at 0.018 and named the angle law: the outcome depended on the
+budget, which session 10's options did not remove either (above). k0 only with :data:`TO_CONVERGENCE` is the
+configuration measured budget-independent (in-sample: both searches name the angle law on the bench recording
+and nothing on 1201; held out, session 11: the same on 1201 and strict nulls 3 and 47).
+
+Session 12 (the lead's call): the defaults are the held-out gate (:data:`FOLDS` = 2), Levenberg-Marquardt and
+the tolerances of :data:`TO_CONVERGENCE`. It costs the outside file 1201 (2/8 outside files exact instead of
+3/8), whose name depended on where Nelder-Mead's budget stopped; in exchange no decision follows the search,
+0/60 strict nulls are named (2/60 in-sample), and the bench recording takes 49.2 s (docs/discovery.md, Runtime)."""
 
 from __future__ import annotations
 
@@ -103,33 +107,40 @@ LOG_FACTOR_BOUND = 1.5
 #: added to), 1 is the regression's, negative reverses it.
 EFFECT_FACTOR_BOUNDS = (-1.0, 3.0)
 #: The search, the one default: ``"nelder-mead"`` (:func:`_nelder_mead`, session 8's) or ``"levenberg-marquardt"``
-#: (:func:`_levenberg_marquardt`). Session 10 measured both to convergence: neither is budget-independent AND keeps
-#: the names (module docstring, "Session 10"), so the default is still the lead's session-9 choice.
-SEARCH = "nelder-mead"
+#: (:func:`_levenberg_marquardt`). Default since session 12: Levenberg-Marquardt to convergence with the held-out
+#: gate (:data:`FOLDS`): with every search to convergence and the gate held out, both searches decide alike (1201
+#: and strict nulls 3 / 47), and LM needs the fewest simulations.
+SEARCH = "levenberg-marquardt"
 #: The held-out gate (session 11): the stances, in their order, are dealt into FOLDS folds (position k is held out
 #: in fold k % FOLDS); each model's joint law is identified and shot on a fold's training stances and its gap taken
 #: on the held-out ones (:func:`shoot_held_out`). 0 (the default): sessions 8-10's in-sample gate
-#: (:func:`shoot_stiffness` on all stances). K = 2 is the option's measured value (module docstring, "Session 11":
-#: K = 4 and 8 decide the same on the outside angle file at 1.5x and 4x the time); not the default, because with
-#: every search to convergence it names 2/8 outside files exactly against the default's 3/8 (it does not name
-#: ``angle_dependent_stiffness_1201``): the lead's call.
-FOLDS = 0
+#: (:func:`shoot_stiffness` on all stances). K = 2 (module docstring, "Session 11": K = 4 and 8 decide the same on
+#: the outside angle file at 1.5x and 4x the time). The default since session 12 (the lead's call): a parameter
+#: only the candidate has is then paid for on stances it was not shot on, the decision no longer follows the
+#: search, 0/60 strict nulls of the second generator are named (2/60 with the in-sample gate) and the bench
+#: recording takes 49.2 s; the price is ``angle_dependent_stiffness_1201``, which the in-sample gate named only
+#: because Nelder-Mead's 20-evaluation budget left the constant model short (2/8 outside files exact, not 3/8).
+FOLDS = 2
 #: Shoot the effect's size as well as k0 (session 10, the lead's trial; off: it names false effects, see
 #: "Session 10"). Read by :func:`hop_impedance.discovery.workflow._gated`.
 SHOOT_EFFECT_SIZE = False
 #: Stop when a step moves every parameter by less than STEP_TOL, or an accepted step's gain (after a rejected
 #: trial: the linearisation's predicted gain) is less than GAP_TOL of the gap; Nelder-Mead: simplex within
-#: STEP_TOL and NM_FATOL (None: GAP_TOL of the start's gap) of its best point. The defaults are session 9's
-#: (the evaluation caps decide); :data:`TO_CONVERGENCE` are session 10's, where the caps are safety stops.
-STEP_TOL = 0.02
-GAP_TOL = 0.05
-NM_FATOL: float | None = 1e-5
+#: STEP_TOL and NM_FATOL (None: GAP_TOL of the start's gap) of its best point. The defaults since session 12 are
+#: session 10's "to convergence" (:data:`TO_CONVERGENCE`), where the evaluation caps are safety stops;
+#: :data:`SESSION9_BUDGET` restores the budgets under which the caps decided.
+STEP_TOL = 0.01
+GAP_TOL = 0.01
+NM_FATOL: float | None = None
 #: Evaluation caps (evaluations of all stances); a search that reaches one reports ``converged: false``.
-LM_MAX_EVALUATIONS = 14
-NM_MAX_EVALUATIONS = 20
-#: Session 10's settings "to convergence" (``bench/discovery_gate_search.py --converge`` sets them).
+LM_MAX_EVALUATIONS = 80
+NM_MAX_EVALUATIONS = 400
+#: Session 10's settings "to convergence", the defaults above (``bench/discovery_gate_search.py --converge``).
 TO_CONVERGENCE = {"STEP_TOL": 0.01, "GAP_TOL": 0.01, "NM_FATOL": None, "LM_MAX_EVALUATIONS": 80,
                   "NM_MAX_EVALUATIONS": 400}
+#: Sessions 8-11's default budgets (the caps decide), for comparisons.
+SESSION9_BUDGET = {"STEP_TOL": 0.02, "GAP_TOL": 0.05, "NM_FATOL": 1e-5, "LM_MAX_EVALUATIONS": 14,
+                   "NM_MAX_EVALUATIONS": 20}
 #: Nelder-Mead (also Levenberg-Marquardt's fallback when a stance fails at the start): first simplex step.
 INITIAL_STEP = 0.5
 #: Levenberg-Marquardt: forward-difference step, first damping (share of diag J'J).
