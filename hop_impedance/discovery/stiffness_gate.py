@@ -60,7 +60,8 @@ parameter the candidate adds (its regression coefficients, its shot k0, its shot
 stances it is judged on. Measured (docs/discovery.md, Runtime, session 11; ``bench/discovery_gate_search.py
 --folds 2``): with every search to convergence (``bench/discovery_gate_search.py --converge``) the outcome
 no longer follows the search on the cases that did (``angle_dependent_stiffness_1201``: LM p 0.017,
-Nelder-Mead p 0.028, neither named; strict nulls 3 and 47 clean with both), the bench recording is named exactly, and shooting the effect's size no longer names
+Nelder-Mead p 0.028, neither named; strict nulls 3 and 47 clean with both), the bench recording is named
+exactly, and shooting the effect's size no longer names
 the false angle law of seed 3, but it still names a false activation on seed 47 with LM (its size at -1, the
 law reversed; p 0.0025), so SHOOT_EFFECT_SIZE stays off. With K = 2 and LM to convergence: 0/60 strict
 nulls of the second generator named (one-sided 95 % bound 4.9 %), the bench recording named in 49.2 s. K: 2, 4
