@@ -136,9 +136,10 @@ NM_FATOL: float | None = None
 #: Evaluation caps (evaluations of all stances); a search that reaches one reports ``converged: false``.
 LM_MAX_EVALUATIONS = 80
 NM_MAX_EVALUATIONS = 400
-#: Session 10's settings "to convergence", the defaults above (``bench/discovery_gate_search.py --converge``).
-TO_CONVERGENCE = {"STEP_TOL": 0.01, "GAP_TOL": 0.01, "NM_FATOL": None, "LM_MAX_EVALUATIONS": 80,
-                  "NM_MAX_EVALUATIONS": 400}
+#: Session 10's settings "to convergence": the defaults above, as read at import (``bench/discovery_gate_search.py
+#: --converge`` restores them after a change).
+TO_CONVERGENCE = {"STEP_TOL": STEP_TOL, "GAP_TOL": GAP_TOL, "NM_FATOL": NM_FATOL,
+                  "LM_MAX_EVALUATIONS": LM_MAX_EVALUATIONS, "NM_MAX_EVALUATIONS": NM_MAX_EVALUATIONS}
 #: Sessions 8-11's default budgets (the caps decide), for comparisons.
 SESSION9_BUDGET = {"STEP_TOL": 0.02, "GAP_TOL": 0.05, "NM_FATOL": 1e-5, "LM_MAX_EVALUATIONS": 14,
                    "NM_MAX_EVALUATIONS": 20}
