@@ -73,8 +73,14 @@ def main() -> None:
 
 
 def _configure(args: argparse.Namespace) -> None:
-    """The gate's search and its session-10 options (stiffness_gate.TO_CONVERGENCE, SHOOT_EFFECT_SIZE)."""
+    """The gate's search and its other options (:func:`configure_gate`)."""
     stiffness_gate.SEARCH = args.search
+    configure_gate(args)
+
+
+def configure_gate(args: argparse.Namespace) -> None:
+    """The gate options this bench and discovery_gate_search.py share: ``--budget`` / ``--converge``
+    (stiffness_gate.SESSION9_BUDGET / TO_CONVERGENCE), ``--effect-size``, ``--folds``."""
     if args.budget:
         for name, value in stiffness_gate.SESSION9_BUDGET.items():
             setattr(stiffness_gate, name, value)

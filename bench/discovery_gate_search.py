@@ -20,7 +20,7 @@ import resource
 import time
 from pathlib import Path
 
-from bench_discovery import gate_gaps
+from bench_discovery import configure_gate, gate_gaps
 
 from hop_impedance.discovery import stiffness_gate
 from hop_impedance.discovery.workflow import discover
@@ -43,7 +43,7 @@ def main() -> None:
     ap.add_argument("--folds", type=int, default=stiffness_gate.FOLDS,
                     help="stiffness_gate.FOLDS: the held-out gate's folds (0: in-sample gate, sessions 8-10)")
     args = ap.parse_args()
-    _configure(args)
+    configure_gate(args)
     for name, rec in _recordings(args):
         for search in args.searches.split(","):
             stiffness_gate.SEARCH = search
@@ -64,18 +64,6 @@ def _recordings(args: argparse.Namespace):
         eff = Effects(angle_dependent_stiffness=True, damping=False, push_off=False)
         yield "bench_discovery 10-hop angle", simulate_stance_set_recording(2.2, ("rigid",), 10, seed=1, effects=eff,
                                                                             rtol=1e-6)[0]
-
-
-def _configure(args: argparse.Namespace) -> None:
-    """The gate's session-10 options: searches to convergence, the candidate's effect size shot too."""
-    if args.budget:
-        for name, value in stiffness_gate.SESSION9_BUDGET.items():
-            setattr(stiffness_gate, name, value)
-    if args.converge:
-        for name, value in stiffness_gate.TO_CONVERGENCE.items():
-            setattr(stiffness_gate, name, value)
-    stiffness_gate.SHOOT_EFFECT_SIZE = args.effect_size
-    stiffness_gate.FOLDS = args.folds
 
 
 def _row(name: str, search: str, rec) -> str:
