@@ -82,8 +82,10 @@ def latency_line(name: str, report, cpu: float, wall: float) -> str:
     steady = lat[1:] if lat.size > 1 else lat
     d = report.diag
     return (f"{name:<34}: take-off->profile p50 {np.percentile(lat, 50):.0f} ms, p99 {np.percentile(lat, 99):.0f} ms "
-            f"(n={lat.size}; without the first stance p50 {np.percentile(steady, 50):.0f}, p99 {np.percentile(steady, 99):.0f} ms); "
-            f"analysis p50/p99 {d('/inverse_dynamics', 'analysis_p50_ms', '?')}/{d('/inverse_dynamics', 'analysis_p99_ms', '?')} ms, "
+            f"(n={lat.size}; without the first stance p50 {np.percentile(steady, 50):.0f}, "
+            f"p99 {np.percentile(steady, 99):.0f} ms); "
+            f"analysis p50/p99 {d('/inverse_dynamics', 'analysis_p50_ms', '?')}/"
+            f"{d('/inverse_dynamics', 'analysis_p99_ms', '?')} ms, "
             f"fit p50/p99 {d('/impedance_estimator', 'fit_p50_ms', '?')}/{d('/impedance_estimator', 'fit_p99_ms', '?')} ms; "
             f"CPU {100 * cpu / wall:.0f} % of one core over {wall:.1f} s")
 
@@ -95,10 +97,10 @@ class Listener:
         import threading
 
         import rclpy
+        from hop_impedance_msgs.msg import ControllerImpedance
 
         from hop_impedance.nodes.common import CONTROLLER_TOPIC, header_stamp_ns, raw_wrench_subscription, stamp_ns
         from hop_impedance.nodes.qos import history_qos, input_qos
-        from hop_impedance_msgs.msg import ControllerImpedance
 
         self.force: dict[int, float] = {}
         self.controller: list[tuple[int, float]] = []  # (header stamp ns = the stance's take-off, arrival)
@@ -198,7 +200,7 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> tuple[s
     # a message heard before this run's first force sample is a previous run's (a --processes estimator still
     # shutting down on a loaded machine latches its last feed, with the same recording's stamps)
     ctrl = [(st, t) for st, t in listener.controller if st > 0 and arrival.size and t >= arrival.min()]
-    for k, (td, to) in enumerate(events):
+    for k, (_td, to) in enumerate(events):
         got = [t for st, t in ctrl if abs(st - to) < 5_000_000]
         if not got:
             lat.append(np.nan)
@@ -220,12 +222,15 @@ def controller_latency(rec: str, events: list[tuple[int, int]], **kw) -> tuple[s
             f"{sum(before_next)}/{len(before_next)}; fit of 3 joints p50/p99 {d('/impedance_estimator', 'fit_p50_ms')}/"
             f"{d('/impedance_estimator', 'fit_p99_ms')} ms (CPU {d('/impedance_estimator', 'fit_cpu_p50_ms')}/"
             f"{d('/impedance_estimator', 'fit_cpu_p99_ms')} ms); pipeline's own take-off to profile p50/p99 "
-            f"{d('/impedance_estimator', 'takeoff_to_profile_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_profile_p99_ms')} ms"
+            f"{d('/impedance_estimator', 'takeoff_to_profile_p50_ms')}/"
+            f"{d('/impedance_estimator', 'takeoff_to_profile_p99_ms')} ms"
             f" (of which to the kinetics' publication {d('/inverse_dynamics', 'takeoff_to_kinetics_p50_ms')}/"
             f"{d('/inverse_dynamics', 'takeoff_to_kinetics_p99_ms')} ms, to the estimator "
-            f"{d('/impedance_estimator', 'takeoff_to_receipt_p50_ms')}/{d('/impedance_estimator', 'takeoff_to_receipt_p99_ms')} ms;"
+            f"{d('/impedance_estimator', 'takeoff_to_receipt_p50_ms')}/"
+            f"{d('/impedance_estimator', 'takeoff_to_receipt_p99_ms')} ms;"
             f" analysis {d('/inverse_dynamics', 'analysis_p50_ms')}/{d('/inverse_dynamics', 'analysis_p99_ms')} ms); "
-            f"load average {load:.1f} on {os.cpu_count()} cores; {gc_pauses.line(arrival.min() if arrival.size else 0.0)}; per stance (ms) "
+            f"load average {load:.1f} on {os.cpu_count()} cores; "
+            f"{gc_pauses.line(arrival.min() if arrival.size else 0.0)}; per stance (ms) "
             + " ".join(f"{x:.1f}" for x in lat) + "".join(f"; replay: {x}" for x in REPLAY_END)), lat
 
 
@@ -315,7 +320,8 @@ def main() -> None:
         if repeat > 1:
             lat = np.concatenate(pooled)
             ok = lat[np.isfinite(lat)]
-            print(f"{name:<26}: pooled over {repeat} runs: p50 {np.percentile(ok, 50):.1f} ms, p99 {np.percentile(ok, 99):.1f} ms, "
+            print(f"{name:<26}: pooled over {repeat} runs: p50 {np.percentile(ok, 50):.1f} ms, "
+                  f"p99 {np.percentile(ok, 99):.1f} ms, "
                   f"max {ok.max():.1f} ms over {ok.size} of {lat.size} stances", flush=True)
     if opts.latency_only:
         return

@@ -14,8 +14,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 from hop_impedance.io.recording_io import load_recording
 from hop_impedance.viz.session import analyze_and_fit, log_session, new_recording_stream
 from hop_impedance.viz.views import cop_x_from_wrench, log_body, log_ground_reaction, log_static_styles
@@ -46,7 +44,8 @@ def main() -> None:
         stream.flush()
 
     t_log = best_of(offline, 3)
-    print(f"offline view of {REC.name} ({len(rec.force)} force, {len(rec.markers)} marker frames, {len(analysis.stances)} stances):")
+    print(f"offline view of {REC.name} ({len(rec.force)} force, {len(rec.markers)} marker frames, "
+          f"{len(analysis.stances)} stances):")
     print(f"  analysis + fits {t_analysis:.2f} s, Rerun logging {t_log:.3f} s ({100 * t_log / t_analysis:.1f} % of the analysis)")
 
     stream = new_recording_stream()
@@ -66,7 +65,8 @@ def main() -> None:
             stream.log("signals/grf/vertical_bw", rr.Scalars(f[k, 2] / bw))
 
     t_row = best_of(rows, 2)
-    print(f"1 s of 1 kHz GRF: columnar {1e3 * t_col:.2f} ms, row by row (scalar only) {1e3 * t_row:.1f} ms ({t_row / t_col:.0f}x)")
+    print(f"1 s of 1 kHz GRF: columnar {1e3 * t_col:.2f} ms, row by row (scalar only) {1e3 * t_row:.1f} ms "
+          f"({t_row / t_col:.0f}x)")
 
     from hop_impedance.biomech.kinematics import sagittal_markers
 
@@ -78,7 +78,8 @@ def main() -> None:
         log_body(stream, tm, xz)
 
     t_flush = best_of(flush_block, 20)
-    print(f"bridge flush of 0.1 s (100 wrenches + 10 marker frames): {1e3 * t_flush:.2f} ms = {100 * t_flush / 0.1:.1f} % of one core")
+    print(f"bridge flush of 0.1 s (100 wrenches + 10 marker frames): {1e3 * t_flush:.2f} ms = "
+          f"{100 * t_flush / 0.1:.1f} % of one core")
     _message_conversion(rec)
 
 

@@ -28,8 +28,8 @@ def main() -> None:
         for mcap in sorted(folder.glob("*.mcap")):
             truth = json.loads(mcap.with_suffix(".truth.json").read_text())
             out = Path(tmp) / "analyze.json"
-            run = subprocess.run([sys.executable, "-m", "hop_impedance.cli", "analyze", "--no-fit", str(mcap), "--json", str(out)],
-                                 capture_output=True, text=True)
+            cmd = [sys.executable, "-m", "hop_impedance.cli", "analyze", "--no-fit", str(mcap), "--json", str(out)]
+            run = subprocess.run(cmd, capture_output=True, text=True)
             if run.returncode:
                 print(f"{mcap.name:72s} analyze failed: {run.stderr.strip().splitlines()[-1]}")
                 continue

@@ -151,11 +151,13 @@ def main() -> None:
         options = AnalysisOptions(marker_cutoff_hz=args.cutoff, force_cutoff_hz=args.force_cutoff or args.cutoff)
         analysis = analyze_recording(load_recording(path), options)
     fit_options = replace(
-        default_fit_options(options), reduce=False, terms=("k0", "k1", "b0"), exclude_touchdown_s=args.edge, exclude_takeoff_s=args.edge
+        default_fit_options(options), reduce=False, terms=("k0", "k1", "b0"), exclude_touchdown_s=args.edge,
+        exclude_takeoff_s=args.edge,
     )
     by_touchdown = {round(s["touchdown_s"], 2): s for s in truth["stances"]}
     budgets = []
-    print(f"{args.frequency} Hz {args.noise}, markers at {args.marker_rate:g} Hz, cut-off {args.cutoff:g} Hz (force {args.force_cutoff or args.cutoff:g} Hz), "
+    print(f"{args.frequency} Hz {args.noise}, markers at {args.marker_rate:g} Hz, cut-off {args.cutoff:g} Hz "
+          f"(force {args.force_cutoff or args.cutoff:g} Hz), "
           f"{1e3 * args.edge:g} ms left out of the fit at each edge")
     print("joint: ID error RMS % of peak td/mid/to | k0,k1 error % for id, kin, td, mid, to, truth (active constraints)")
     for stance in analysis.stances:
@@ -168,7 +170,8 @@ def main() -> None:
               f"take-off {1e3 * (stance.takeoff_s - true_stance['takeoff_s']):+.1f} ms vs truth); {edge_steps(true_stance)}")
         for joint, row in b.items():
             rms = "/".join(f"{row['rms'][p]:.1f}" for p in PHASES)
-            ks = "  ".join(f"{n} {100 * row['k'][n][0]:+5.1f},{100 * row['k'][n][1]:+5.1f}" for n in ("id", "kin", "td", "mid", "to", "truth"))
+            ks = "  ".join(f"{n} {100 * row['k'][n][0]:+5.1f},{100 * row['k'][n][1]:+5.1f}"
+                           for n in ("id", "kin", "td", "mid", "to", "truth"))
             print(f"  {joint:5s} {rms:15s} | {ks} ({row['active']} active; law's min K {row['k_min']:.0f} N m/rad)")
     print("median over stances")
     for joint in JOINTS:

@@ -38,7 +38,8 @@ def fit_and_capture(stance, options, solver) -> tuple[object, bool]:
         saved = os.dup(1)
         os.dup2(sink.fileno(), 1)
         try:
-            fit = fit_joint_stance(stance.time_s, stance.angle_rad, stance.angular_velocity_rad_s, stance.moment_nm, options, solver)
+            fit = fit_joint_stance(stance.time_s, stance.angle_rad, stance.angular_velocity_rad_s, stance.moment_nm,
+                                   options, solver)
         finally:
             os.dup2(saved, 1)
             os.close(saved)
