@@ -35,7 +35,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 #: Interface packages: name -> source folder (built in this order; each into build/<name>).
 PACKAGES = {"hop_impedance_msgs": ROOT / "msg_defs", "mocap4r2_msgs": ROOT / "mocap4r2_msgs"}
-WHEEL_BUILDER_PATH = re.compile(r"/opt/python/cp3\d+-cp3\d+/(include/python3\.\d+|lib/python3\.\d+/site-packages/numpy/_core/include)")
+WHEEL_BUILDER_PATH = re.compile(
+    r"/opt/python/cp3\d+-cp3\d+/(include/python3\.\d+|lib/python3\.\d+/site-packages/numpy/_core/include)")
 
 
 def source_hash(pkg_dir: Path) -> str:

@@ -154,7 +154,8 @@ def test_rerun_skips_up_to_date_and_redoes_changed(inputs, tmp_path):
     finally:
         changed.unlink()
     assert (third.analysed, third.skipped) == (1, 2)
-    assert (tmp_path / "json" / "copy_changes.json").read_bytes() == (tmp_path / "json" / "sim_2p20hz_hard.json").read_bytes().replace(
+    original = (tmp_path / "json" / "sim_2p20hz_hard.json").read_bytes()
+    assert (tmp_path / "json" / "copy_changes.json").read_bytes() == original.replace(
         b"sim_2p20hz_hard.mcap", b"copy_changes.mcap")
     # another option: everything is redone
     from hop_impedance.batch.task import BatchOptions

@@ -98,7 +98,8 @@ def run_inverse_dynamics(model, t, q, hip_xz, wrench, workdir: Path) -> dict[str
     workdir = Path(workdir)
     osim_model = build_model(model)
     coords = np.column_stack([t, q[:, 3], hip_xz[:, 0], hip_xz[:, 1], q[:, 2] - q[:, 3], q[:, 1] - q[:, 2], q[:, 0] - q[:, 1]])
-    _write_table(workdir / "coords.mot", "coords", ["time", "root_rz", "root_tx", "root_ty", "hip_q", "knee_q", "ankle_q"], coords, False)
+    _write_table(workdir / "coords.mot", "coords", ["time", "root_rz", "root_tx", "root_ty", "hip_q", "knee_q", "ankle_q"],
+                 coords, False)
     n = t.size
     grf = np.column_stack([t, wrench[:, 0], wrench[:, 1], np.zeros(n), np.zeros((n, 3)), np.zeros(n), np.zeros(n), wrench[:, 2]])
     labels = ["time", "ground_force_vx", "ground_force_vy", "ground_force_vz", "ground_force_px", "ground_force_py",

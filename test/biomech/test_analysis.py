@@ -11,9 +11,9 @@ import pytest
 from biomech_synth import hopping_recording, push_in_chunks
 
 from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording, recording_span
-from hop_impedance.io.analyze_json import analysis_to_json
 from hop_impedance.biomech.stages import StanceAnalysisStage
 from hop_impedance.biomech.stance_metrics import com_displacement_from_grf, joint_work, overall_joint_stiffness
+from hop_impedance.io.analyze_json import analysis_to_json
 from hop_impedance.recording import GRAVITY_M_S2
 
 REPO = Path(__file__).resolve().parents[2]

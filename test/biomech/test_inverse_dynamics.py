@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from biomech_synth import pinned_chain, make_model
+from biomech_synth import make_model, pinned_chain
 
 from hop_impedance.biomech.inverse_dynamics import EXTENSOR_SIGN, inverse_dynamics_2d, joint_power
 from hop_impedance.biomech.kinematics import segment_coms

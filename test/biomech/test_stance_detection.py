@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from biomech_synth import hopping_recording
 
-from hop_impedance.biomech.force_plate import sagittal_wrench
 from hop_impedance.biomech.stance_detection import DetectorOptions, StanceDetector, detect_stances
 
 DATA = Path(__file__).resolve().parents[3] / "shared" / "data_candidates"

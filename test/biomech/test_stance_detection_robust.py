@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from hop_impedance.biomech.analysis import analyze_recording
-from hop_impedance.biomech.stance_detection import DetectorOptions, StanceDetector, detect_stances
+from hop_impedance.biomech.stance_detection import DetectorOptions, StanceDetector
 from hop_impedance.recording import GRAVITY_M_S2
 
 FOREIGN = Path(__file__).resolve().parents[3] / "shared" / "foreign"

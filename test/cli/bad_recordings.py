@@ -14,7 +14,13 @@ import numpy as np
 
 from hop_impedance.io.mcap_io import McapWriter
 from hop_impedance.io.recording_io import (
-    MARKER_TYPE, SUBJECT_TYPE, WRENCH_TYPE, _header, load_recording, save_recording, write_recording_messages,
+    MARKER_TYPE,
+    SUBJECT_TYPE,
+    WRENCH_TYPE,
+    _header,
+    load_recording,
+    save_recording,
+    write_recording_messages,
 )
 from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC, SUBJECT_TOPIC, ForcePlateSeries, MarkerSeries
 
@@ -129,7 +135,8 @@ def write_marker_only(path, rec) -> Path:
         m = rec.markers
         for k, t in enumerate(m.stamp_ns):
             pts = [{"x": float(p[0]), "y": float(p[1]), "z": float(p[2])} for p in m.positions_m[k]]
-            w.write(MARKER_TOPIC, MARKER_TYPE, {"header": _header(int(t), "lab"), "names": list(m.names), "positions": pts}, int(t))
+            w.write(MARKER_TOPIC, MARKER_TYPE, {"header": _header(int(t), "lab"), "names": list(m.names), "positions": pts},
+                    int(t))
     return Path(path)
 
 

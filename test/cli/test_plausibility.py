@@ -9,7 +9,11 @@ import pytest
 from hop_impedance.biomech.analysis import analyze_recording
 from hop_impedance.biomech.stages import equivalent_linear_impedance
 from hop_impedance.impedance.plausibility import (
-    SEED_BODY_MASS_KG, PlausibilityBounds, controller_damping, controller_rejection, table2_band,
+    SEED_BODY_MASS_KG,
+    PlausibilityBounds,
+    controller_damping,
+    controller_rejection,
+    table2_band,
 )
 from hop_impedance.impedance.recording_fits import fit_recording
 from hop_impedance.impedance.synthetic import TABLE2_COEFFICIENTS

@@ -40,7 +40,8 @@ def test_active_constraints_are_respected_and_optimal():
     theta = np.zeros(9)
     theta[cols] = sol.coefficients
     worst = constraint_violations(regs, theta)
-    scale = {"stiffness_nonnegative": 1e3, "damping_nonnegative": 1.0, "spring_energy_nonnegative": 1e2, "damper_power_nonpositive": 1e2}
+    scale = {"stiffness_nonnegative": 1e3, "damping_nonnegative": 1.0, "spring_energy_nonnegative": 1e2,
+             "damper_power_nonpositive": 1e2}
     for name, value in worst.items():
         assert value <= 1e-6 * scale[name], name
     reference = fit_by_slsqp(X, stance.moment_nm, A)
@@ -203,7 +204,8 @@ def test_fits_print_nothing_on_stdout(capfd):
 #: (frequency, seed, joint, extra term): fits with terms k0, k1, b0 + extra whose full-row solve polished
 #: where no row was active (OSQP printed "Polishing not needed"); found as working-set fallbacks, solved here
 #: on the full row set directly.
-FULL_ROW_FALLBACK_CASES = [(1.53, 55, "ankle", "b3"), (2.20, 2, "knee", "b3"), (2.20, 50, "ankle", "b1"), (2.20, 73, "knee", "b3")]
+FULL_ROW_FALLBACK_CASES = [(1.53, 55, "ankle", "b3"), (2.20, 2, "knee", "b3"), (2.20, 50, "ankle", "b1"),
+                           (2.20, 73, "knee", "b3")]
 
 
 @pytest.mark.parametrize("freq,seed,joint,extra", FULL_ROW_FALLBACK_CASES)

@@ -10,12 +10,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import JOINTS, fit_synthetic
 
 from hop_impedance.impedance.report import fit_records, write_report
 from hop_impedance.impedance.stance_fit import FIT_JSON_KEYS
 from hop_impedance.impedance.synthetic import synthetic_stance
-
-from conftest import JOINTS, fit_synthetic
 
 REPO = Path(__file__).resolve().parents[2]
 

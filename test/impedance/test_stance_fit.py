@@ -7,12 +7,11 @@ import json
 
 import numpy as np
 import pytest
+from conftest import FREQUENCIES_HZ, JOINTS, fit_synthetic
 
 from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares
 from hop_impedance.impedance.stance_fit import FIT_JSON_KEYS, FitOptions, fit_joint_stance, fit_to_json
 from hop_impedance.impedance.synthetic import TABLE2_COEFFICIENTS, synthetic_stance
-
-from conftest import FREQUENCIES_HZ, JOINTS, fit_synthetic
 
 REDUCED_LAW = dict(reduce=False, terms=("k0", "k1", "b0"))
 
@@ -30,7 +29,7 @@ def test_noise_free_recovery_within_2_percent(joint, freq):
     assert fit.r_squared > 0.9999
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def noisy_reduced_law_errors(joint, freq, n_stances=40):
     """Relative errors (k0, k1) of the reduced-law fit over n_stances noisy stances.
 
@@ -195,7 +194,8 @@ class TestRejections:
         bad_rho[0] = np.nan
         solver = ConstrainedLeastSquares()
         fits = [
-            fit_joint_stance(st.time_s, rho, st.angular_velocity_rad_s, st.moment_nm, FitOptions(noise_bandwidth_hz=12.0), solver=solver)
+            fit_joint_stance(st.time_s, rho, st.angular_velocity_rad_s, st.moment_nm, FitOptions(noise_bandwidth_hz=12.0),
+                             solver=solver)
             for st, rho in zip(good, [good[0].angle_rad, bad_rho, good[2].angle_rad])
         ]
         assert [f.ok for f in fits] == [True, False, True]

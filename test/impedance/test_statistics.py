@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from conftest import fit_synthetic
 from scipy import stats
 
 from hop_impedance.impedance.statistics import (
@@ -15,8 +16,6 @@ from hop_impedance.impedance.statistics import (
     wilcoxon_variable_vs_constant,
 )
 from hop_impedance.impedance.synthetic import synthetic_stance
-
-from conftest import fit_synthetic
 
 
 def records():

@@ -16,10 +16,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import fit_synthetic
 
 from hop_impedance.impedance.synthetic import synthetic_stance
-
-from conftest import fit_synthetic
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings"
 

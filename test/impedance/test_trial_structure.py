@@ -18,7 +18,12 @@ import pytest
 
 from hop_impedance.biomech.analysis import analyze_recording
 from hop_impedance.impedance.recording_fits import (
-    SEED_TERMS, StructureSelector, choose_structure, default_fit_options, fit_recording_trial, given_structure,
+    SEED_TERMS,
+    StructureSelector,
+    choose_structure,
+    default_fit_options,
+    fit_recording_trial,
+    given_structure,
 )
 
 FOREIGN = Path(__file__).resolve().parents[3] / "shared" / "foreign"

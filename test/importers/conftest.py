@@ -38,7 +38,8 @@ def hopping_recording(seed: int = 3, duration_s: float = 2.0, mass_kg: float = 6
     torque = np.stack([0.01 * fz, -cop_x * fz, np.where(in_contact, 2.0 * np.sin(np.pi * s), 0.0)], axis=1)
     tm = np.arange(int(duration_s * m_rate)) / m_rate
     flex = 0.3 * np.sin(2 * np.pi * tm / period) ** 2
-    base = np.array([[0.10, -0.1, 0.02], [-0.08, -0.1, 0.03], [-0.02, -0.1, 0.09], [0.0, -0.1, 0.5], [-0.02, -0.1, 0.92], [-0.05, -0.1, 1.62]])
+    base = np.array([[0.10, -0.1, 0.02], [-0.08, -0.1, 0.03], [-0.02, -0.1, 0.09], [0.0, -0.1, 0.5], [-0.02, -0.1, 0.92],
+                     [-0.05, -0.1, 1.62]])
     pos = np.repeat(base[None], tm.size, axis=0)
     pos[:, 3, 0] += 0.25 * flex
     pos[:, 4:, 2] -= 0.1 * flex[:, None]

@@ -46,12 +46,14 @@ def main() -> int:
     ax[0, 1].plot(ik.column("time"), np.degrees(ik.column("knee_angle_r")), "C0--", label="knee, OpenSim IK")
     ax[0, 1].plot(t_abs, np.degrees(j.angle_rad[:, 2] - np.pi), "C2", label="hip rho3 - 180 (ours, incl. trunk)")
     ax[0, 1].plot(ik.column("time"), np.degrees(ik.column("hip_flexion_r")), "C2--", label="hip flexion, OpenSim IK")
-    ax[0, 1].set(xlim=(st.touchdown_s - 0.1, st.takeoff_s + 0.1), xlabel="time (s)", ylabel="flexion (deg)", title="Angles vs OpenSim IK")
+    ax[0, 1].set(xlim=(st.touchdown_s - 0.1, st.takeoff_s + 0.1), xlabel="time (s)", ylabel="flexion (deg)",
+                 title="Angles vs OpenSim IK")
     ax[0, 1].legend(fontsize=8)
     for k, n in enumerate(names):
         ax[1, 0].plot(j.time_s, j.moment_nm[:, k] / 60, f"C{k}", label=n)
         if fits[k].rejection_reason is None and fits[k].moment_fit.size:
-            ax[1, 0].plot(fits[k].time_s + j.time_s[0], fits[k].moment_fit / 60, f"C{k}:", label=f"{n} fit (R2 {fits[k].r_squared:.2f})")
+            ax[1, 0].plot(fits[k].time_s + j.time_s[0], fits[k].moment_fit / 60, f"C{k}:",
+                          label=f"{n} fit (R2 {fits[k].r_squared:.2f})")
     ax[1, 0].set(xlabel="time since touchdown (s)", ylabel="net moment, both legs (N m/kg)", title="Inverse dynamics, extensor +")
     ax[1, 0].legend(fontsize=8)
     for k, n in enumerate(names):
@@ -59,7 +61,8 @@ def main() -> int:
         if f.rejection_reason is None and f.stiffness.size and np.any(f.stiffness):
             ax[1, 1].plot(f.time_s + j.time_s[0], f.stiffness, f"C{k}", label=f"{n} stiffness")
         print(f"{n}: peak moment {np.nanmax(j.moment_nm[:, k]) / 60:.2f} N m/kg (both legs), fit status {f.status}, "
-              f"R2 {f.r_squared:.2f}, terms {f.terms}, mean stiffness {np.nanmean(f.stiffness) if f.stiffness.size else np.nan:.0f} N m/rad")
+              f"R2 {f.r_squared:.2f}, terms {f.terms}, "
+              f"mean stiffness {np.nanmean(f.stiffness) if f.stiffness.size else np.nan:.0f} N m/rad")
     ax[1, 1].set(xlabel="time since touchdown (s)", ylabel="stiffness (N m/rad)", title="Impedance fits (seed Eqs. 3-9)")
     ax[1, 1].legend(fontsize=8)
     fig.suptitle("OpenCap Subject4 drop jump DJ1: TRC + MOT imported to the contract, analysed")

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from hop_impedance.importers import MissingMarkersError, import_c3d, write_c3d
-from hop_impedance.importers.c3d_import import c3d_session, unit_scale, MOMENT_UNITS
+from hop_impedance.importers.c3d_import import MOMENT_UNITS, c3d_session, unit_scale
 from hop_impedance.recording import MARKER_NAMES
 
 # ezc3d stores C3D data as float32: ~7 significant digits.

@@ -92,7 +92,8 @@ class TestPluginGait:
         ref = import_c3d(pig_c3d, _with_hip(name, exported)).markers.positions_m[:, HIP]
         davis = import_c3d(pig_c3d, _with_hip(name, f"{tag}HJC_davis"))
         err_mm = 1e3 * np.linalg.norm(davis.markers.positions_m[:, HIP] - ref, axis=1)
-        print(f"\n{side}: Davis et al. 1991 HJC vs {exported}: median {np.nanmedian(err_mm):.2f} mm, max {np.nanmax(err_mm):.2f} mm")
+        print(f"\n{side}: Davis et al. 1991 HJC vs {exported}: median {np.nanmedian(err_mm):.2f} mm, "
+              f"max {np.nanmax(err_mm):.2f} mm")
         assert np.nanmax(err_mm) < 5.0  # issue 19: within 5 mm (measured 0.73-0.74 mm)
         assert any(f"leg length 0.{866 if side == 'right' else 877} m from {tag}LegLength" in w for w in davis.warnings)
 
@@ -177,6 +178,7 @@ def test_head_point_beyond_c7_follows_the_trunk_not_the_head(request, which):
     d = get["HAT_top_c7"] - get["RHEAD_side"]
     along = np.sum(d * axis, axis=1)
     across = np.linalg.norm(d - along[:, None] * axis, axis=1)
-    print(f"\n{which}: C7-line point - side of head: along the trunk {1e3 * np.nanmedian(along):.0f} mm, across {1e3 * np.nanmedian(across):.0f} mm")
+    print(f"\n{which}: C7-line point - side of head: along the trunk {1e3 * np.nanmedian(along):.0f} mm, "
+          f"across {1e3 * np.nanmedian(across):.0f} mm")
     assert abs(np.nanmedian(along)) < 0.06  # height along the trunk: within 6 cm (measured 2 and 53 mm)
     assert 0.08 < np.nanmedian(across) < 0.25  # the head is forward of the trunk line (measured 126 and 183 mm)

@@ -121,12 +121,14 @@ class TestMaps:
         np.testing.assert_allclose(all_pos[:, idx["hip"]], np.repeat(HARRINGTON_RIGHT[None], 3, axis=0), atol=1e-9)
         np.testing.assert_allclose(all_pos[:, idx["head"]], np.repeat([[0.0, -0.07, 1.61]], 3, axis=0), atol=1e-12)
         lines = source_notes(all_labels, mapping, notes)
-        assert "hip <- RHJC_h = hip joint centre, Harrington et al. 2007 (J Biomech 40:595), right, from RASI, LASI, SACR" in lines
+        assert ("hip <- RHJC_h = hip joint centre, Harrington et al. 2007 (J Biomech 40:595), right, "
+                "from RASI, LASI, SACR") in lines
         assert "toe <- RTOE" in lines
 
     def test_a_marked_trochanter_wins_over_the_regression(self):
         labels, pos = self._session()
-        all_labels, _, _ = with_virtual_markers(labels + ["RGT"], np.concatenate([pos, pos[:, :1]], axis=1), mapping_from_dict(PELVIS_MAP))
+        all_labels, _, _ = with_virtual_markers(labels + ["RGT"], np.concatenate([pos, pos[:, :1]], axis=1),
+                                                mapping_from_dict(PELVIS_MAP))
         assert all_labels[resolve_labels(all_labels, mapping_from_dict(PELVIS_MAP))["hip"]] == "RGT"
 
     def test_missing_input_is_named(self):

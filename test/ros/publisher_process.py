@@ -9,11 +9,9 @@ import sys
 import time
 
 import rclpy
-from geometry_msgs.msg import WrenchStamped
-from geometry_msgs.msg import Point
-from rclpy.qos import QoSProfile, ReliabilityPolicy
-
+from geometry_msgs.msg import Point, WrenchStamped
 from hop_impedance_msgs.msg import MarkerArray
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 
 def main() -> int:

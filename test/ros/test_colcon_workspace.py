@@ -71,7 +71,8 @@ def test_fresh_colcon_workspace_builds_imports_and_runs_every_node(tmp_path):
     check = f"""set -eo pipefail
 {README_ENV}
 {README_SOURCE}
-python -c 'import hop_impedance, hop_impedance_msgs.msg as h, mocap4r2_msgs.msg as m; h.MarkerArray(); m.Markers(); print("modules", hop_impedance.__file__, h.__file__, m.__file__)'
+python -c 'import hop_impedance, hop_impedance_msgs.msg as h, mocap4r2_msgs.msg as m; h.MarkerArray(); m.Markers()
+print("modules", hop_impedance.__file__, h.__file__, m.__file__)'
 {checks}
 """
     venv = Path(sys.prefix)

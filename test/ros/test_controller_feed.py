@@ -25,6 +25,7 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy")
 
+from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, SubjectInfo  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 
 from hop_impedance.biomech.analysis import analyze_recording  # noqa: E402
@@ -33,7 +34,6 @@ from hop_impedance.nodes.common import CONTROLLER_TOPIC, PROFILE_TOPIC, STANCE_K
 from hop_impedance.nodes.inverse_dynamics import stance_message  # noqa: E402
 from hop_impedance.nodes.qos import history_qos, latched_qos, result_qos  # noqa: E402
 from hop_impedance.recording import SUBJECT_TOPIC  # noqa: E402
-from hop_impedance_msgs.msg import ControllerImpedance, ImpedanceProfile, StanceKinetics, SubjectInfo  # noqa: E402
 from test.cli import bad_recordings as bad  # noqa: E402
 
 MAX_AGE_S = 1.5

@@ -8,9 +8,10 @@ children started like ``hop-impedance pipeline --processes``; this process colle
 What is asserted, with ``t_up`` the wall time at which the restarted node's reader (a new
 endpoint GID; the killed one lingers until its DDS lease expires) is visible in the graph and,
 for inverse_dynamics, its first progress report with input data received (the replay matches
-new readers only after DDS discovery, measured up to several seconds under load) and a 3 s margin for its readers to match the publishers (with 0.5 s, and again with 1.5 s in a later
-fresh-clone CI run, the first stances after an estimator restart were missed: discovery between
-the new process and inverse_dynamics was still under way):
+new readers only after DDS discovery, measured up to several seconds under load) and a 3 s margin
+for its readers to match the publishers (with 0.5 s, and again with 1.5 s in a later fresh-clone CI
+run, the first stances after an estimator restart were missed: discovery between the new process
+and inverse_dynamics was still under way):
 
 - every stance whose touchdown event arrives after ``t_up + 3 s`` gets exactly one summary
   (accepted, or with a rejection reason) and three profiles, matched by touchdown stamp;
@@ -32,13 +33,19 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy")
 
-from hop_impedance.nodes.common import EVENTS_TOPIC, PROFILE_TOPIC, SUMMARY_TOPIC, stamp_ns  # noqa: E402
+from hop_impedance_msgs.msg import ImpedanceProfile, Progress, StanceEvent, StanceSummary  # noqa: E402
+
+from hop_impedance.nodes.common import (  # noqa: E402
+    EVENTS_TOPIC,
+    PROFILE_TOPIC,
+    PROGRESS_TOPIC,  # noqa: E402
+    STANCE_KINETICS_TOPIC,  # noqa: E402
+    SUMMARY_TOPIC,
+    stamp_ns,
+)
 from hop_impedance.nodes.qos import result_qos  # noqa: E402
 from hop_impedance.nodes.runner import PipelineConfig, start_children, stop_children  # noqa: E402
 from hop_impedance.recording import FORCE_TOPIC, MARKER_TOPIC  # noqa: E402
-from hop_impedance.nodes.common import STANCE_KINETICS_TOPIC  # noqa: E402
-from hop_impedance.nodes.common import PROGRESS_TOPIC  # noqa: E402
-from hop_impedance_msgs.msg import ImpedanceProfile, Progress, StanceEvent, StanceSummary  # noqa: E402
 
 REC = "recordings/sim_2p20hz_hard.mcap"
 MARGIN_S = 3.0
@@ -53,10 +60,12 @@ class Collector:
         self.summaries: list[tuple[StanceSummary, float]] = []
         self.profiles: list[ImpedanceProfile] = []
         node.create_subscription(StanceEvent, EVENTS_TOPIC, self._on_event, result_qos(1000))
-        node.create_subscription(StanceSummary, SUMMARY_TOPIC, lambda m: self.summaries.append((m, time.monotonic())), result_qos(1000))
+        node.create_subscription(StanceSummary, SUMMARY_TOPIC, lambda m: self.summaries.append((m, time.monotonic())),
+                                 result_qos(1000))
         node.create_subscription(ImpedanceProfile, PROFILE_TOPIC, self.profiles.append, result_qos(1000))
         self.progress: list[tuple[str, int, float]] = []  # (node, inputs received, wall arrival)
-        node.create_subscription(Progress, PROGRESS_TOPIC, lambda m: self.progress.append((m.node, sum(m.received), time.monotonic())), result_qos(1000))
+        node.create_subscription(Progress, PROGRESS_TOPIC,
+                                 lambda m: self.progress.append((m.node, sum(m.received), time.monotonic())), result_qos(1000))
 
     def _on_event(self, msg):
         if msg.event_type == StanceEvent.TOUCHDOWN:

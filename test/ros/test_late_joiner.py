@@ -17,12 +17,12 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy")
 
+from hop_impedance_msgs.msg import StanceKinetics, StanceSummary  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 
 from hop_impedance.nodes.common import STANCE_KINETICS_TOPIC, SUMMARY_TOPIC, stamp_ns  # noqa: E402
 from hop_impedance.nodes.qos import history_qos, result_qos  # noqa: E402
 from hop_impedance.nodes.runner import PipelineConfig, node_parameters  # noqa: E402
-from hop_impedance_msgs.msg import StanceKinetics, StanceSummary  # noqa: E402
 
 REC = "recordings/sim_2p20hz_hard.mcap"
 

@@ -82,7 +82,8 @@ def test_every_launched_executable_is_an_entry_point_with_its_parameters(tmp_pat
         assert pfile in installed, f"{pfile} is not installed by setup.py from config/"
         doc = yaml.safe_load((ROOT / "config" / pfile).read_text())
         params = set((doc.get(exe) or {}).get("ros__parameters", {}))
-        assert params - declared[exe] == set(), f"config/{pfile} [{exe}] sets {sorted(params - declared[exe])}, not declared by {exe}"
+        assert params - declared[exe] == set(), (
+            f"config/{pfile} [{exe}] sets {sorted(params - declared[exe])}, not declared by {exe}")
         if pfile != "pipeline.yaml":
             assert params, f"config/{pfile} has no parameters for {exe}"
         for_all[pfile] = set((doc.get("/**") or {}).get("ros__parameters", {}))

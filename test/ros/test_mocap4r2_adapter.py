@@ -11,13 +11,13 @@ from pathlib import Path
 import pytest
 
 rclpy = pytest.importorskip("rclpy")
+from hop_impedance_msgs.msg import MarkerArray  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 
 from hop_impedance.child_env import child_env  # noqa: E402
 from hop_impedance.nodes.mocap4r2_adapter import MarkerIdentities, Mocap4r2AdapterNode  # noqa: E402
 from hop_impedance.recording import MARKER_NAMES  # noqa: E402
-from hop_impedance_msgs.msg import MarkerArray  # noqa: E402
 from mocap4r2_msgs.msg import Marker  # noqa: E402
 from test.ros.mocap4r2_publisher_process import INDICES, LABELS, position  # noqa: E402
 

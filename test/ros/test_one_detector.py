@@ -18,11 +18,12 @@ import yaml
 
 pytest.importorskip("rclpy")
 
+from hop_impedance_msgs.msg import StanceEvent  # noqa: E402
+
 from hop_impedance.biomech.stance_detection import DetectorOptions  # noqa: E402
 from hop_impedance.io.mcap_io import MessageStream  # noqa: E402
 from hop_impedance.nodes.common import EVENTS_TOPIC, STANCE_KINETICS_TOPIC, stamp_ns  # noqa: E402
 from hop_impedance.nodes.runner import PipelineConfig, run_pipeline  # noqa: E402
-from hop_impedance_msgs.msg import StanceEvent  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]
 REC = str(REPO / "recordings" / "sim_2p20hz_hard.mcap")

@@ -14,7 +14,6 @@ Guarantee checked (docs/pipeline.md, "No silent loss"):
    summary or lies in a gap whose loss is reported (on the next summary, or after the last one).
 """
 
-import numpy as np
 import pytest
 
 pytest.importorskip("rclpy")

@@ -2,7 +2,6 @@
 machine and writes an .rrd that holds one stance log per stance the pipeline summarised, with the pipeline's own
 coefficients."""
 
-import json
 import os
 
 import numpy as np

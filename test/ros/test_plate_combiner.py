@@ -1,7 +1,7 @@
 """Two force plates live: the replay node plays a two-plate MCAP (built from a bundled recording,
 test/two_plates.py), the plate_combiner node (its own process, config/plates.yaml) sums them,
-the stance_detector node detects stances on the sum, over real DDS; the combined wrench gives the summed plate's stances and coefficients within
-1e-6 relative, and a plate that stops is reported on /diagnostics, not summed as zero."""
+the stance_detector node detects stances on the sum, over real DDS; the combined wrench gives the summed
+plate's stances and coefficients within 1e-6 relative, and a plate that stops is reported on /diagnostics, not summed as zero."""
 
 import os
 import subprocess
@@ -176,7 +176,8 @@ def test_a_plate_that_stops_is_reported_on_diagnostics(tmp_path):
     rec = load_recording(RECORDING)
     mcap = tmp_path / "right_stops.mcap"
     _write_two_plates(mcap, split_two_plates(rec.force), right_until=700, n=1500)
-    wrenches, status, _ = _run(mcap, 700, tmp_path, timeout_s=30.0, settle_s=2.5)  # end_timeout_s 1 s: the right plate never reaches the end
+    # end_timeout_s 1 s: the right plate never reaches the end
+    wrenches, status, _ = _run(mcap, 700, tmp_path, timeout_s=30.0, settle_s=2.5)
     assert len(wrenches) == 700, _values(status)  # nothing after the right plate stopped: no half-weight wrench
     final = status[-1]
     assert final.level == bytes([2]) and "right" in final.message, final.message

@@ -9,11 +9,11 @@ field was never set (0, the default) is a whole-record stance.
 from __future__ import annotations
 
 import numpy as np
+from hop_impedance_msgs.msg import StanceKinetics
 from rclpy.serialization import deserialize_message, serialize_message
 
 from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording
 from hop_impedance.nodes.inverse_dynamics import stance_from_message, stance_message
-from hop_impedance_msgs.msg import StanceKinetics
 from test.cli import bad_recordings as bad
 
 

@@ -10,10 +10,10 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy")
 from geometry_msgs.msg import WrenchStamped  # noqa: E402
+from hop_impedance_msgs.msg import MarkerArray  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 
 from hop_impedance.child_env import child_env  # noqa: E402
-from hop_impedance_msgs.msg import MarkerArray  # noqa: E402
 
 N = 500
 

@@ -27,7 +27,8 @@ def _sensor_messages(rec):
     def stamp(header, ns):
         header.stamp.sec, header.stamp.nanosec = divmod(int(ns), 1_000_000_000)
 
-    subject = msgs.SubjectInfo(subject_id=rec.subject.subject_id, body_mass=rec.subject.body_mass_kg, body_height=rec.subject.body_height_m)
+    subject = msgs.SubjectInfo(subject_id=rec.subject.subject_id, body_mass=rec.subject.body_mass_kg,
+                               body_height=rec.subject.body_height_m)
     wrenches = []
     for ns, f, tq in zip(rec.force.stamp_ns, rec.force.force_n, rec.force.torque_nm):
         m = WrenchStamped()
@@ -37,7 +38,8 @@ def _sensor_messages(rec):
         wrenches.append(m)
     frames = []
     for ns, pos in zip(rec.markers.stamp_ns, rec.markers.positions_m):
-        m = msgs.MarkerArray(names=list(rec.markers.names), positions=[Point(x=float(p[0]), y=float(p[1]), z=float(p[2])) for p in pos])
+        m = msgs.MarkerArray(names=list(rec.markers.names),
+                             positions=[Point(x=float(p[0]), y=float(p[1]), z=float(p[2])) for p in pos])
         stamp(m.header, ns)
         frames.append(m)
     return subject, wrenches, frames

@@ -103,7 +103,8 @@ def test_rejected_stances_are_logged_with_their_reason(tmp_path, analysed):
     positions[(t > s4.touchdown_s + 0.05) & (t < s4.touchdown_s + 0.15), rec.markers.names.index("knee")] = np.nan
     cut_ns = analysis.start_ns + int((s9.touchdown_s + 0.1) * 1e9)
     keep_f, keep_m = rec.force.stamp_ns < cut_ns, rec.markers.stamp_ns < cut_ns
-    force = dataclasses.replace(rec.force, stamp_ns=rec.force.stamp_ns[keep_f], force_n=rec.force.force_n[keep_f], torque_nm=rec.force.torque_nm[keep_f])
+    force = dataclasses.replace(rec.force, stamp_ns=rec.force.stamp_ns[keep_f], force_n=rec.force.force_n[keep_f],
+                                torque_nm=rec.force.torque_nm[keep_f])
     markers = dataclasses.replace(rec.markers, stamp_ns=rec.markers.stamp_ns[keep_m], positions_m=positions[keep_m])
     path = tmp_path / "bad.mcap"
     save_recording(path, dataclasses.replace(rec, force=force, markers=markers))
