@@ -18,6 +18,16 @@ uncertainty matches the scatter) and each trial's median.
 
 CPU time at the end (about 25 s per frequency for four trials).
 
+``--variant`` instead records trials of issue 17's seed-like hopper (``scenarios.seed_like_options()`` with
+``bench/simulator_issue17.py``'s variant flags, ``--bell``, ``--law-scale``, ``--surface``, ``--pad``, ``--trunk``,
+``--push-timing``, ...), push-off and trunk balance on, and judges every joint against the truth's reference: the
+Eq. 3 fit (k0, k1, b0) of the simulator's noise-free moment on the true angle and rate, stance by stance
+(:mod:`hop_impedance.simulation.whole_hip`; for the hip that is the whole hip law of the truth file, spring +
+push-off + balance); the reference's own median is printed against Table 2::
+
+    nice -n 19 .venv/bin/python bench/recovery_errors.py --variant --hops 10 --seeds 1 --bell 0.9 \\
+        --law-scale bell09_rigid_pad15_3_push06_08_trunk500_60 --surface rigid --pad 15,3 --push-timing 0.6,0.8 --trunk 500,60
+
 ``--scheduler local`` runs one Dask task per (frequency, seed) on the embedded
 local cluster of ``hop-impedance batch``, ``--scheduler tcp://HOST:8786`` on an
 existing cluster (:func:`hop_impedance.batch.runner.cluster_map`); the trials
@@ -27,13 +37,23 @@ are pooled in seed order as in the serial run.
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from hop_impedance.validation.coefficient_recovery import JOINTS, RecoveryResult, median_interval, recover_pooled
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import simulator_issue17 as s17  # noqa: E402  (a bench next to this one: the variant flags)
+
+from hop_impedance.validation.coefficient_recovery import (  # noqa: E402
+    JOINTS,
+    RecoveryResult,
+    median_interval,
+    recover_pooled,
+)
 
 
 def print_table(freq_hz: float, results: dict[str, RecoveryResult]) -> None:
@@ -85,6 +105,67 @@ def edge_profile(freq_hz: float, seed: int, hops: int, cutoff_hz: float) -> None
                   + " ".join(f"{err[n - 1 - i]:+5.1f}" for i in reversed(after)))
 
 
+#: ``--variant``: an analysed stance is the truth's whose touchdown is nearest, within this (s; the pad's soft
+#: contact moves the detected touchdown by a few ms, across the 10 ms rounding of ``compare_with_law``'s matching).
+MATCH_S = 0.02
+
+
+def variant_errors(freq_hz: float, seed: int, hops: int, noisy: bool, cutoff_hz: float, options: dict,
+                   surface: str) -> tuple[dict[str, list], dict[str, list]]:
+    """One variant trial recorded, analysed and fitted (k0, k1, b0 given): per joint, each stance's [k0, k1] error
+    against the truth's reference fit (fraction), and the reference's [k0, k1]; the first stance left out."""
+    from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording
+    from hop_impedance.impedance.recording_fits import fit_recording
+    from hop_impedance.simulation.sensors import SensorConfig, noise_free
+    from hop_impedance.simulation.simulate import simulate_recording
+    from hop_impedance.simulation.whole_hip import stance_hip_fit
+    from hop_impedance.validation.coefficient_recovery import law_fit_options
+
+    sensors = SensorConfig() if noisy else noise_free(SensorConfig())
+    rec, truth = simulate_recording(freq_hz, surface, hops, seed=seed, sensors=sensors, **options)
+    analysis = analyze_recording(rec, AnalysisOptions(marker_cutoff_hz=cutoff_hz, force_cutoff_hz=cutoff_hz))
+    fits = fit_recording(analysis, law_fit_options(analysis.options, 0.0))
+    errors: dict[str, list] = {j: [] for j in JOINTS}
+    references: dict[str, list] = {j: [] for j in JOINTS}
+    for stance, stance_fits in zip(analysis.stances, fits):
+        true = min(truth["stances"], key=lambda s: abs(s["touchdown_s"] - stance.touchdown_s))
+        if abs(true["touchdown_s"] - stance.touchdown_s) > MATCH_S or true["index"] < 1 or stance.rejection_reason is not None:
+            continue
+        for j, joint in enumerate(JOINTS):
+            ref = stance_hip_fit(true, joint=j)
+            if stance_fits[joint].ok and ref.ok:
+                c, r = stance_fits[joint].coefficients, ref.coefficients
+                errors[joint].append([c[k] / r[k] - 1.0 for k in ("k0", "k1")])
+                references[joint].append([r[k] for k in ("k0", "k1")])
+    return errors, references
+
+
+def print_variant_table(freq_hz: float, seeds, hops: int, cutoffs: dict[str, float], options: dict, surface: str) -> None:
+    """``--variant``: per noise level and joint, the median error against the truth's reference and its interval."""
+    from hop_impedance.simulation.fit_calibration import table2_k
+
+    rng = np.random.default_rng(0)
+    table2 = table2_k(freq_hz)
+    for label, cutoff in cutoffs.items():
+        pooled: dict[str, list] = {j: [] for j in JOINTS}
+        refs: dict[str, list] = {j: [] for j in JOINTS}
+        for seed in seeds:
+            errors, references = variant_errors(freq_hz, seed, hops, label == "noisy", cutoff, options, surface)
+            for joint in JOINTS:
+                pooled[joint] += errors[joint]
+                refs[joint] += references[joint]
+        for j, joint in enumerate(JOINTS):
+            if not pooled[joint]:
+                print(f"{freq_hz:4.2f} Hz {label:5s} {joint:5s} no stance compared")
+                continue
+            med, lo, hi = median_interval(100 * np.asarray(pooled[joint], float), rng)
+            ref = np.median(np.asarray(refs[joint], float), axis=0)
+            print(f"{freq_hz:4.2f} Hz {label:5s} {joint:5s} n={len(pooled[joint]):2d} | against the truth's reference: "
+                  f"median k0 {med[0]:+6.1f} [{lo[0]:+.1f}, {hi[0]:+.1f}] k1 {med[1]:+6.1f} [{lo[1]:+.1f}, {hi[1]:+.1f}] % "
+                  f"| reference median k0 {ref[0]:6.0f} k1 {ref[1]:6.0f} vs Table 2 {table2[0, j]:.0f} / {table2[1, j]:.0f} "
+                  f"({100 * (ref[0] / table2[0, j] - 1):+.0f} / {100 * (ref[1] / table2[1, j] - 1):+.0f} %)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frequencies", type=float, nargs="+", default=[1.53, 1.87, 2.20])
@@ -98,12 +179,22 @@ def main() -> None:
                         help="instead of the table: the moment error near each stance edge of seed SEED's noise-free trials")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="one Dask task per frequency and seed: 'local' (embedded cluster) or tcp://HOST:8786")
+    parser.add_argument("--variant", action="store_true",
+                        help="issue 17's seed-like hopper with the variant flags below, judged against the truth's reference")
+    s17.add_variant_arguments(parser)
     args = parser.parse_args()
     cpu0, wall0 = time.process_time(), time.perf_counter()
     cutoffs = {"clean": args.clean_cutoff, "noisy": args.noisy_cutoff}
     if args.edge_profile is not None:
         for freq in args.frequencies:
             edge_profile(freq, args.edge_profile, args.hops, args.clean_cutoff)
+        return
+    if args.variant:
+        options, said = s17.variant_options(s17.VariantArgs(**vars(args)))
+        print(f"variant: {said}; seeds {args.seeds}, {args.hops} hops")
+        for freq in args.frequencies:
+            print_variant_table(freq, args.seeds, args.hops, cutoffs, options, args.surface)
+        print(f"CPU {time.process_time() - cpu0:.1f} s")
         return
     if args.scheduler:
         from hop_impedance.batch.runner import cluster_map

@@ -332,6 +332,31 @@ def floats(text: str, n: int | None = None) -> tuple[float, ...]:
     return values
 
 
+class VariantArgs(argparse.Namespace):
+    """Variant flags parsed by another bench: a flag of :func:`variant_options` that bench does not define reads as not given."""
+
+    def __getattr__(self, name: str):
+        return None
+
+
+def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
+    """The variant flags :func:`variant_options` reads (this bench's, ``demo_on_variant.py``'s, ``recovery_errors.py``'s)."""
+    parser.add_argument("--bell", type=float, default=None, metavar="A_MIN",
+                        help="the bell activation's floor instead of seed_like_options' 0.7 (1: no bell)")
+    parser.add_argument("--law-scale", choices=tuple(LAW_SCALES), default="none",
+                        help="the law: Table 2 (none), Table 2 x scenarios.SEED_LIKE_LAW_SCALE (seed_like) or x "
+                             "BELL09_LAW_SCALE (bell09, the law calibrated for a_min 0.9)")
+    parser.add_argument("--surface", choices=("hard", "rigid", "soft"), default="hard",
+                        help="the trials' surface (default seed 001's hard; rigid: a force plate)")
+    parser.add_argument("--pad", metavar="MM,N", help="a shoe pad in series: MM mm at 3 body weights, exponent N")
+    parser.add_argument("--posture", metavar="A,K,H", help="touchdown ankle rho1, knee and hip flexion (rad)")
+    parser.add_argument("--trunk", metavar="K,B", help="trunk-balance stiffness and damping instead of 800,40")
+    parser.add_argument("--push-timing", metavar="ONSET,DURATION",
+                        help="push-off onset and duration as fractions of the passive stance instead of 0.5,0.5")
+    parser.add_argument("--contact-ahead", type=float, default=None, metavar="M",
+                        help="ground contact this far ahead of the toe marker (m) instead of the toe tip's")
+
+
 def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     """``seed_like_options()`` with the command line's variant, and a one-line description of it."""
     options = seed_like_options()
@@ -366,20 +391,7 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--bell", type=float, default=None, metavar="A_MIN",
-                        help="the bell activation's floor instead of seed_like_options' 0.7 (1: no bell)")
-    parser.add_argument("--law-scale", choices=tuple(LAW_SCALES), default="none",
-                        help="the law: Table 2 (none), Table 2 x scenarios.SEED_LIKE_LAW_SCALE (seed_like) or x "
-                             "BELL09_LAW_SCALE (bell09, the law calibrated for a_min 0.9)")
-    parser.add_argument("--surface", choices=("hard", "rigid", "soft"), default="hard",
-                        help="the trials' surface (default seed 001's hard; rigid: a force plate)")
-    parser.add_argument("--pad", metavar="MM,N", help="a shoe pad in series: MM mm at 3 body weights, exponent N")
-    parser.add_argument("--posture", metavar="A,K,H", help="touchdown ankle rho1, knee and hip flexion (rad)")
-    parser.add_argument("--trunk", metavar="K,B", help="trunk-balance stiffness and damping instead of 800,40")
-    parser.add_argument("--push-timing", metavar="ONSET,DURATION",
-                        help="push-off onset and duration as fractions of the passive stance instead of 0.5,0.5")
-    parser.add_argument("--contact-ahead", type=float, default=None, metavar="M",
-                        help="ground contact this far ahead of the toe marker (m) instead of the toe tip's")
+    add_variant_arguments(parser)
     parser.add_argument("--freqs", default=",".join(f"{f:g}" for f in FREQS), help="a subset of 1.53,1.87,2.2")
     parser.add_argument("--seed", type=int, default=1, help="the trials' seed (hop-to-hop variability; default 1)")
     parser.add_argument("--no-seed001", action="store_true", help="leave seed 001's rows out (quicker)")

@@ -27,6 +27,9 @@ Layout (format ``hop_impedance.simulation.truth/1``)
   take-off, damping, trunk-balance work, ground work, energy at touchdown / take-off, bookkeeping
   residual, and ``flight_j`` (what the following flight discards; absent on the last stance), see
   :mod:`hop_impedance.simulation.energy_budget`.
+- ``whole_hip_law`` (only with a trunk balance): the whole hip law's reference against which hip recovery is
+  judged, the seed's Eq. 3 fit (k0, k1, b0) of each stance's noise-free whole hip moment on the true hip angle,
+  per stance and pooled over the stances after the first (:func:`~hop_impedance.simulation.whole_hip.whole_hip_reference`).
 
 Numbers in ``samples`` are rounded to 7 significant digits to keep files small.
 """
@@ -45,6 +48,7 @@ from hop_impedance.simulation.energy_budget import law_part, part_moments_nm, tr
 from hop_impedance.simulation.hopping_trial import HoppingTrial, StanceRecord, leg_stiffness_n_per_m, simulate_resample
 from hop_impedance.simulation.impedance_laws import COEFFICIENT_NAMES, Eq3Law, PushOff
 from hop_impedance.simulation.sensors import SensorConfig, sample_times_s, stamps_ns
+from hop_impedance.simulation.whole_hip import whole_hip_reference
 
 TRUTH_FORMAT = "hop_impedance.simulation.truth/1"
 
@@ -120,7 +124,9 @@ def trial_truth(
 ) -> dict:
     """The whole truth document of a simulated recording."""
     cfg = trial.config
-    return {
+    stances = [{**stance_truth(trial, rec, sensors, subject.body_weight_n), "energy_j": budget}
+               for rec, budget in zip(trial.stances, trial_energy_budget(trial))]
+    document = {
         "format": TRUTH_FORMAT,
         "generator": generator,
         "subject": {"subject_id": subject.subject_id, "body_mass_kg": subject.body_mass_kg,
@@ -162,9 +168,11 @@ def trial_truth(
         "recording": {"start_ns": sensors.start_ns, "duration_s": trial.t_end_s},
         "stop_reason": trial.stop_reason,
         "notes": list(trial.notes),
-        "stances": [{**stance_truth(trial, rec, sensors, subject.body_weight_n), "energy_j": budget}
-                    for rec, budget in zip(trial.stances, trial_energy_budget(trial))],
+        "stances": stances,
     }
+    if cfg.trunk_balance is not None:  # the whole hip law differs from the Eq. 3 law (older files stay the same)
+        document["whole_hip_law"] = whole_hip_reference(document)
+    return document
 
 
 def write_truth(path: str | Path, truth: dict) -> None:
