@@ -57,6 +57,9 @@ class SurfaceSurprise:
     extra_flexion_rad: np.ndarray  # (3,): range of flexion on hard minus on soft, ankle / knee / hip
     joint_stiffness_soft: np.ndarray  # (3,) N m/rad, joint_stiffness_nm_rad
     joint_stiffness_hard: np.ndarray
+    soft: StanceSimulation | None = None  # the two stances themselves (bench/simulator_seed001_shape.py reads them)
+    hard: StanceSimulation | None = None
+    push_scale: float = float("nan")  # the soft hop's calibrated push-off scale
 
     @property
     def leg_change(self) -> float:
@@ -109,4 +112,5 @@ def unexpected_hard_vs_soft(freq_hz: float = 2.2, effects: Effects = Effects(), 
         return np.max(st.rho_rad, axis=0) - st.rho_rad[0]
 
     return SurfaceSurprise(leg_stiffness_n_per_m(chain, soft), leg_stiffness_n_per_m(chain, hard),
-                           flexion(hard) - flexion(soft), joint_stiffness_nm_rad(soft), joint_stiffness_nm_rad(hard))
+                           flexion(hard) - flexion(soft), joint_stiffness_nm_rad(soft), joint_stiffness_nm_rad(hard),
+                           soft, hard, float(cal.push_scale))
