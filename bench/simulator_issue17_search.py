@@ -38,11 +38,16 @@ from hop_impedance.simulation.scenarios import seed_like_options, shoe_pad  # no
 FREQS = (1.53, 1.87, 2.2)
 
 
-def options_for(a_min: float, pad: str | None = None, push_timing: str | None = None, trunk: str | None = None) -> dict:
+def options_for(a_min: float, pad: str | None = None, push_timing: str | None = None, trunk: str | None = None,
+                posture: str | None = None) -> dict:
     """seed_like_options with the bell's floor a_min (1: no bell), a shoe pad ``"MM,N"`` (None: none) and the
     push-off's ``"ONSET,DURATION"`` (fractions of the passive stance; None: seed_like_options') and the trunk
-    balance's ``"K,B"`` (N m/rad, N m s/rad; None: seed_like_options' 800, 40)."""
+    balance's ``"K,B"`` (N m/rad, N m s/rad; None: seed_like_options' 800, 40) and the touchdown posture ``"A,K,H"``
+    (ankle rho1, knee and hip flexion, rad, as simulator_issue17's; None: seed_like_options')."""
     options = {**seed_like_options(), "bell_activation_min": None if a_min >= 1.0 else a_min}
+    if posture:
+        ankle, knee, hip = (float(v) for v in posture.split(","))
+        options["touchdown_rho_rad"] = (ankle, np.pi + knee, np.pi + hip)
     if push_timing:
         options["push_timing"] = tuple(float(v) for v in push_timing.split(","))
     if trunk:
@@ -54,9 +59,9 @@ def options_for(a_min: float, pad: str | None = None, push_timing: str | None = 
 
 
 def search_one(a_min: float, iterations: int, tolerance: float, surface: str = "hard", pad: str | None = None,
-               push_timing: str | None = None, trunk: str | None = None, hops: int = 6) -> dict:
+               push_timing: str | None = None, trunk: str | None = None, hops: int = 6, posture: str | None = None) -> dict:
     """Calibrate the law at every frequency for this a_min, then measure issue 17's criteria with it."""
-    options = options_for(a_min, pad, push_timing, trunk)
+    options = options_for(a_min, pad, push_timing, trunk, posture)
     scales, calibration_dev, notes = {}, {}, []
     for f in FREQS:
         t0 = time.perf_counter()
@@ -102,6 +107,7 @@ def main() -> None:
     parser.add_argument("--hops", type=int, default=6,
                         help="hops of the calibration's trials (default 6; the criteria's trials have 10)")
     parser.add_argument("--trunk", metavar="K,B", help="trunk-balance stiffness and damping instead of 800,40")
+    parser.add_argument("--posture", metavar="A,K,H", help="touchdown ankle rho1, knee and hip flexion (rad)")
     args = parser.parse_args()
     header = (f"| a_min | calibration: worst ankle/knee fit deviation at 1.53 / 1.87 / 2.2 Hz (%, {args.hops} hops) | "
               "the same in the 10-hop criteria trials (%) | worst (%) | binding Table 1 cells out | which | "
@@ -111,7 +117,7 @@ def main() -> None:
     for a_min in (float(v) for v in args.a_min.split(",")):
         t0 = time.perf_counter()
         r = search_one(a_min, args.iterations, args.tolerance, args.surface, args.pad, args.push_timing, args.trunk,
-                       args.hops)
+                       args.hops, args.posture)
         results.append(r)
         print(f"a_min {a_min:g} ({time.perf_counter() - t0:.0f} s):")
         for n in r["notes"]:

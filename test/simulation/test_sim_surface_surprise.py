@@ -69,5 +69,8 @@ def test_seed_001_laws_are_met_without_the_shoe_pad():
     assert k_soft == pytest.approx(f_soft / x_soft) and k_hard == pytest.approx(f_hard / x_hard)
     assert k_hard < 0.98 * k_soft and x_hard > x_soft  # the leg gives more on the surface that gives less
     assert 0.04 < x_soft < 0.09  # measured 0.062 m of leg compression (COM - toe) at 2.3 BW
+    # the stances kept (bench/simulator_seed001_shape.py): their force peaks are the leg figures', the hard one shorter
+    assert s.soft.grf_n[:, 1].max() == pytest.approx(f_soft) and s.hard.grf_n[:, 1].max() == pytest.approx(f_hard)
+    assert s.hard.t_s[-1] < s.soft.t_s[-1] and 0.0 < s.push_scale < 2.0
     with pytest.raises(ValueError, match="no calibrated hop on the soft surface"):
         unexpected_hard_vs_soft(2.2, keep_pad=True, **options)
