@@ -34,7 +34,8 @@ Prints one line per run and the table (markdown) at the end.
 runs one Dask task per case and seed through :func:`hop_impedance.batch.runner.cluster_map`, discovery
 with one process per task; the lines of each run print in the serial order once all are back.
 ``--gate-folds K [--gate-search levenberg-marquardt] [--gate-converge]``: the stiffness gate's session-11 option
-(held out over K folds) and its search, set in this process, so only without ``--scheduler``.
+(held out over K folds) and its search; ``--screen-uncorrected``: session 13's option (the held-out test before the
+gate at alpha, ``stiffness_gate.SCREEN_CORRECTED = False``); set in this process, so only without ``--scheduler``.
 """
 
 from __future__ import annotations
@@ -131,6 +132,8 @@ def main() -> None:
     ap.add_argument("--gate-folds", type=int, default=None, help="stiffness_gate.FOLDS (held-out gate; no --scheduler)")
     ap.add_argument("--gate-search", choices=("nelder-mead", "levenberg-marquardt"), default=None)
     ap.add_argument("--gate-converge", action="store_true", help="stiffness_gate.TO_CONVERGENCE")
+    ap.add_argument("--screen-uncorrected", action="store_true",
+                    help="stiffness_gate.SCREEN_CORRECTED = False (session 13's option: the held-out test at alpha)")
     args = ap.parse_args()
     _configure_gate(ap, args)
     sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})
@@ -161,7 +164,7 @@ def main() -> None:
 
 def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """The stiffness gate's options, set in this process (a Dask worker would not see them)."""
-    if args.gate_folds is None and args.gate_search is None and not args.gate_converge:
+    if args.gate_folds is None and args.gate_search is None and not args.gate_converge and not args.screen_uncorrected:
         return
     if args.scheduler:
         ap.error("--gate-* options set the gate in this process: run without --scheduler")
@@ -174,6 +177,8 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
     if args.gate_converge:
         for name, value in stiffness_gate.TO_CONVERGENCE.items():
             setattr(stiffness_gate, name, value)
+    if args.screen_uncorrected:
+        stiffness_gate.SCREEN_CORRECTED = False
 
 
 def case_run(source: str, name: str, seed: int, hops: int, sizes: EffectSizes, freqs,

@@ -18,10 +18,11 @@ For the current model and for every candidate (current model + one effect):
    model predicts zero force in flight);
 4. a candidate passes when the per-stance log gap ratios
    ``d_i = log G_cur_i - log G_cand_i`` are significantly > 0 (one-sided
-   one-sample t-test over the held-out stances, Bonferroni over the candidates
-   of the step), the pooled held-out gap shrinks by at least :data:`MIN_SHRINK`,
-   and the physics admits it (:func:`admissible`); it is then named only if it also beats the current
-   model with its constant stiffness chosen through the simulation
+   one-sample t-test over the held-out stances, Bonferroni over the candidates of the step; session 13's
+   option :data:`hop_impedance.discovery.stiffness_gate.SCREEN_CORRECTED` = False leaves that factor to the
+   held-out stiffness gate alone, measured and not adopted), the pooled held-out gap shrinks by at
+   least :data:`MIN_SHRINK`, and the physics admits it (:func:`admissible`); it is then named only if it also
+   beats the current model with its constant stiffness chosen through the simulation
    (:mod:`hop_impedance.discovery.stiffness_gate`). Choice: a t-test on log
    ratios, not Wilcoxon: with 6 stances (the outside recordings) the exact
    Wilcoxon cannot go below 1/64 = 0.016 > 0.05/8, i.e. nothing could ever be named.
@@ -417,7 +418,9 @@ def score(trial: MeasuredTrial, current: HeldOutRuns, cands: list[HeldOutRuns]) 
 
 
 def passes(sc: ForwardScore, n_candidates: int) -> bool:
-    """Significant (Bonferroni), relevant (pooled shrink >= MIN_SHRINK) and physically admissible."""
+    """Significant (Bonferroni over ``n_candidates``: the caller's factor, see
+    :func:`hop_impedance.discovery.stiffness_gate.screen_factor`), relevant (pooled shrink >= MIN_SHRINK) and
+    physically admissible."""
     return significant(sc.p_value, sc.shrink, n_candidates) and sc.admissible
 
 
