@@ -23,7 +23,9 @@ CPU time at the end (about 25 s per frequency for four trials).
 ``--push-timing``, ...), push-off and trunk balance on, and judges every joint against the truth's reference: the
 Eq. 3 fit (k0, k1, b0) of the simulator's noise-free moment on the true angle and rate, stance by stance
 (:mod:`hop_impedance.simulation.whole_hip`; for the hip that is the whole hip law of the truth file, spring +
-push-off + balance); the reference's own median is printed against Table 2::
+push-off + balance); the reference's own median is printed against Table 2. (The default trials have no push-off and
+no trunk balance, so their whole hip law is the Eq. 3 law the table compares with: the reference returns it within
+0.005 %, test/simulation/test_sim_whole_hip.py.)::
 
     nice -n 19 .venv/bin/python bench/recovery_errors.py --variant --hops 10 --seeds 1 --bell 0.9 \\
         --law-scale bell09_rigid_pad15_3_push06_08_trunk500_60 --surface rigid --pad 15,3 --push-timing 0.6,0.8 --trunk 500,60
