@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
           f"impedance_estimator -> recorder ({'separate processes' if args.processes else 'one process'})")
     report = run_pipeline(config)
     code = print_report(report, config.recording, args.tolerate_loss)
-    for line in seed_lines(report):
+    for line in seed_lines(report) + truth_lines(report, config.recording):
         print(line)
     if args.rrd:
         from hop_impedance.viz.session import write_rrd
@@ -93,3 +93,28 @@ def seed_lines(report) -> list[str]:
     if not freqs or not stances:
         return ["against the seed: no accepted stance with a hop frequency"]
     return seed_findings(stances, float(np.median(freqs)), float(np.median(masses)) if masses else math.nan)
+
+
+def truth_lines(report, recording: str) -> list[str]:
+    """The run's hip fits against the whole hip law of the truth file beside the recording, if it states one.
+
+    A simulated recording ``REC.mcap`` comes with ``REC.truth.json``; when its hopper has a trunk balance the truth
+    states the whole hip law (issue 17), and the hip is judged against it
+    (:func:`hop_impedance.simulation.whole_hip.judge_hip`). Nothing for lab recordings or truths without one.
+    """
+    import json
+
+    from hop_impedance.nodes.common import stamp_ns
+    from hop_impedance.simulation.whole_hip import judge_hip
+
+    path = Path(recording).with_suffix(".truth.json")
+    if not path.is_file():
+        return []
+    truth = json.loads(path.read_text())
+    fits = []
+    for p in report.profiles:
+        if p.joint == "hip" and p.accepted and not p.rejection_reason:
+            c = dict(zip(p.terms, p.coefficients))
+            fits.append((stamp_ns(p.touchdown_stamp), c.get("k0", 0.0), c.get("k1", 0.0)))
+    return judge_hip(fits, truth)
+

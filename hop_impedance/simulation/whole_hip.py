@@ -109,3 +109,55 @@ def hip_parts_fits(stance: dict) -> dict[str, JointImpedanceFit]:
     constraints (Eqs. 7-9) are inactive: this says how much of the whole hip fit the balance makes.
     """
     return {key: stance_hip_fit(stance, key) for key in ("moments_nm", *HIP_PARTS)}
+
+
+#: Issue 17's band for a recovered k0 / k1 against its law (15 %), applied to the hip against the whole hip law.
+BAND = 0.15
+
+
+def judge_hip(fits: list[tuple[int, float, float]], truth: dict, match_ns: int = 20_000_000) -> list[str]:
+    """Recovered hip k0 / k1 against the truth's whole hip law (``truth["whole_hip_law"]``), per stance and as medians.
+
+    Parameters
+    ----------
+    fits : list of (int, float, float)
+        Per accepted hip fit: touchdown stamp (ns, the recording's clock), k0 (N m/rad), k1 (N m/rad^2).
+    truth : dict
+        A truth document with ``whole_hip_law`` (written when the hopper has a trunk balance) and ``stances``
+        (their ``touchdown_stamp_ns``); without ``whole_hip_law`` nothing is judged.
+    match_ns : int
+        A fit belongs to the truth stance whose touchdown is nearest, if within this (default 20 ms).
+
+    Returns
+    -------
+    list of str
+        Lines to print: the per-stance pairs and the medians with the verdict (within :data:`BAND` or outside);
+        empty without a whole hip law.
+    """
+    reference = truth.get("whole_hip_law")
+    if not reference:
+        return []
+    by_index = {s["index"]: s for s in reference["stances"]}
+    truth_stances = [(int(s["touchdown_stamp_ns"]), s["index"]) for s in truth["stances"]]
+    pairs = []
+    for stamp, k0, k1 in fits:
+        gap, index = min((abs(t - stamp), i) for t, i in truth_stances)
+        ref = by_index.get(index, {})
+        if gap <= match_ns and "rejection_reason" not in ref and ref:
+            pairs.append((index, k0, k1, ref["k0"], ref["k1"]))
+    if not pairs:
+        return ["hip against the truth's whole hip law: no accepted stance matched a truth stance"]
+    lines = ["hip against the truth's whole hip law (Eq. 3 fit of the noise-free spring + push-off + trunk-balance moment "
+             "on the true hip angle), per stance: fitted / whole-law k0, k1"]
+    lines += [f"  stance {i}: k0 {k0:6.1f} / {r0:6.1f} ({100 * (k0 / r0 - 1):+4.0f} %), k1 {k1:6.0f} / {r1:6.0f} "
+              f"({100 * (k1 / r1 - 1):+4.0f} %)" for i, k0, k1, r0, r1 in pairs]
+    med = np.median(np.array([p[1:] for p in pairs], float), axis=0)
+    dev = med[:2] / med[2:] - 1.0
+    verdict = "within" if np.all(np.abs(dev) <= BAND) else "outside"
+    pooled = reference["pooled"]
+    lines.append(f"  medians of {len(pairs)} stances: k0 {med[0]:.0f} vs {med[2]:.0f} ({100 * dev[0]:+.0f} %), "
+                 f"k1 {med[1]:.0f} vs {med[3]:.0f} ({100 * dev[1]:+.0f} %): {verdict} {100 * BAND:.0f} %; "
+                 f"the whole law pooled over {pooled['n_stances']} stances after the first: median k0 "
+                 f"{pooled['k0']['median']:.0f}, k1 {pooled['k1']['median']:.0f} "
+                 f"(inverse-variance {pooled['k0']['pooled']:.0f} / {pooled['k1']['pooled']:.0f})")
+    return lines
