@@ -14,7 +14,7 @@ DEMO_OUT ?= demo_out
 help:
 	@echo "make demo   - set up and run the main job on $(DEMO_RECORDING)"
 	@echo "make test   - set up, lint (ruff, mypy) and run the tests"
-	@echo "make lint   - ruff, mypy, pylint duplicate-code and function length on the package"
+	@echo "make lint   - ruff (package, bench, tests, scripts), mypy, pylint duplicate-code and function length on the package"
 	@echo "make bench  - run the benchmarks in bench/"
 	@echo "make screenshot - render docs/rerun_screenshot.png headless"
 	@echo "make clean  - remove build products (keeps .venv)"
@@ -28,11 +28,12 @@ demo: setup
 test: setup lint
 	@$(PY) -m pytest -q
 
-# ruff (style, imports, bugbear, pyupgrade) and mypy (the package, lenient) as pyproject.toml configures them;
+# ruff (style, imports, bugbear, pyupgrade) on the package, bench/, test/ and scripts/ (one set of conventions;
+# bench/ and test/ had drifted while only the package was checked) and mypy (the package, lenient) as pyproject.toml configures them;
 # pylint's duplicate-code check alone (6 lines or more, comments, docstrings, imports and signatures ignored);
 # at most 3 functions over 60 lines, each with its reason above it (issue 20); lint-strict below.
 lint: setup lint-strict
-	@$(VENV)/bin/ruff check hop_impedance
+	@$(VENV)/bin/ruff check hop_impedance bench test scripts
 	@$(VENV)/bin/mypy
 	@$(VENV)/bin/pylint --disable=all --enable=duplicate-code --min-similarity-lines=6 --score=n hop_impedance
 	@$(PY) scripts/check_function_length.py hop_impedance

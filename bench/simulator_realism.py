@@ -463,7 +463,8 @@ def main() -> None:
         doc = ROOT / "docs" / "simulator_realism.md"
         doc.write_text(
             "# Simulator realism\n\nProduced by `.venv/bin/python bench/simulator_realism.py --write"
-            f"{' --trunk' if args.trunk and not args.seed_like else ''}{'' if args.flight == 'prescribed' else ' --flight ' + args.flight}"
+            f"{' --trunk' if args.trunk and not args.seed_like else ''}"
+            f"{'' if args.flight == 'prescribed' else ' --flight ' + args.flight}"
             f"{' --posture ' + args.posture if args.posture else ''}"
             f"{'' if args.contact == 'marker' or args.seed_like else ' --contact ' + args.contact}"
             f"{' --seed-like' if args.seed_like else ''}`; "

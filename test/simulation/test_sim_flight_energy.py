@@ -99,8 +99,8 @@ def test_energy_at_touchdown_equals_energy_at_the_previous_take_off(lossless_tri
     for rec, nxt in zip(tr.stances[:-1], tr.stances[1:]):
         st = rec.stance
 
-        def energy(g, gd, rho):
-            return sum(mechanical_energy_j(chain, g, gd)) + float(rec.law.elastic_energy_j(rho, st.ref))
+        def energy(g, gd, rho, law=rec.law, ref=st.ref):
+            return sum(mechanical_energy_j(chain, g, gd)) + float(law.elastic_energy_j(rho, ref))
 
         e_takeoff = energy(st.g[-1], st.gd[-1], st.rho_rad[-1])
         e_touchdown = energy(nxt.touchdown.g, nxt.touchdown.gd, nxt.stance.rho_rad[0])

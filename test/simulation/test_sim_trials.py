@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 from moment_truth import analysed_and_true_moments
@@ -231,7 +229,7 @@ def test_round_trip_inverse_dynamics_recovers_true_moments(clean_recording, clea
         inner[int(0.1 * n):int(0.9 * n)] = True
         peak = np.abs(true).max(axis=0)
 
-        def rms(sel):
+        def rms(sel, est=est, true=true, peak=peak):
             return np.sqrt(np.mean((est[sel] - true[sel]) ** 2, axis=0)) / peak
 
         assert np.all(rms(ok & inner) < 0.02), rms(ok & inner)
