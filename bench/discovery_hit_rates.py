@@ -56,6 +56,8 @@ from hop_impedance.simulation.stance_set import EffectSizes, simulate_stance_set
 from hop_impedance.validation.strict_generator import StrictConfig, strict_recording
 
 BASE = dict(angle_dependent_stiffness=False, damping=False, push_off=False)
+#: ``--json-dir``: where each run's discover document is written (empty: nowhere).
+JSON_DIR: list[str] = []
 FREQS = (1.53, 1.87, 2.2)
 #: Frequencies where the stance-set generator cannot make the case (passive stances do not take off):
 #: damping at 1.53 Hz (the soft Table-2 stiffness with b0 = 2 never unloads), activation at 1.53 Hz
@@ -132,10 +134,12 @@ def main() -> None:
     ap.add_argument("--gate-folds", type=int, default=None, help="stiffness_gate.FOLDS (held-out gate; no --scheduler)")
     ap.add_argument("--gate-search", choices=("nelder-mead", "levenberg-marquardt"), default=None)
     ap.add_argument("--gate-converge", action="store_true", help="stiffness_gate.TO_CONVERGENCE")
+    ap.add_argument("--json-dir", default="", help="also write each run's discover document to DIR/<case>_<seed>.json")
     ap.add_argument("--screen-uncorrected", action="store_true",
                     help="stiffness_gate.SCREEN_CORRECTED = False (session 13's option: the held-out test at alpha)")
     args = ap.parse_args()
     _configure_gate(ap, args)
+    JSON_DIR[:] = [args.json_dir] if args.json_dir else []
     sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})
     freqs = tuple(float(f) for f in args.freqs.split(",") if f) or None
     calls = [("simulator", name, seed, args.hops, sizes, freqs)
@@ -233,6 +237,12 @@ def run_one(rec, label: str, expected: set, tally: dict, workers: int | None = N
         tally["extra"] += not expected  # a null that cannot be judged is not a correct "none"
         print(f"{label}: discovery refused: {exc} (counted as a miss)", flush=True)
         return
+    if JSON_DIR:
+        from hop_impedance.discovery.report import to_json_ready
+
+        out = Path(JSON_DIR[0]) / ("_".join(label.split()).replace("=", "") + ".json")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(to_json_ready(doc)))
     flags = classify(expected, doc)
     tally["runs"] += 1
     for k in ("exact", "named", "named_or_ambiguous", "extra"):

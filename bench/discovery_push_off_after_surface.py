@@ -8,7 +8,8 @@ with the table body (``discover`` keeps the table's thigh/HAT split on both, ``n
 2. leave-one-stance-out, like ``discover``'s round 1: the surface model and the surface model + push-off, each
    identified on the other stances and the held-out stance simulated; per model the mean held-out gap split into
    its 10 terms (``forward_selection._gap_of``), the push-off's shrink and one-sided p against ALPHA / 7 (the 7
-   candidates left after the surface), its identified timing, per-stance amplitudes and simulated net work;
+   candidates left after the surface), its identified timing, per-stance amplitudes and simulated net work, and
+   each model's simulated minus measured stance time (sampled past the measured end);
 3. the TRUE law (the truth file's per-hop law and surface, ``discovery_truth_gap.truth_law``) with and without its
    push-off, simulated the same way: whether our forward comparison can see the push-off at all;
 4. ``--gate``: the held-out stiffness gate (``stiffness_gate.shoot``, 2 folds, Levenberg-Marquardt to convergence)
@@ -31,7 +32,8 @@ import numpy as np
 
 from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery import stiffness_gate as sg
-from hop_impedance.discovery.identify import identify, per_stance_push_off
+from hop_impedance.discovery.forward import ground_of
+from hop_impedance.discovery.identify import identify, per_stance_push_off, touchdown_moments
 from hop_impedance.discovery.measurement import measure_trial
 from hop_impedance.discovery.model import FittedLaw, ModelSpec, feature_names
 from hop_impedance.io.recording_io import load_recording
@@ -68,6 +70,22 @@ def held_out(trial, spec: ModelSpec, effect: str | None, scales: np.ndarray, ver
                   f"ankle/knee/hip {np.round(push, 1).tolist()} N m, simulated net work {out['net_work_j']:.2f} J, "
                   f"measured {fs.measured_net_work_j(s):.2f} J")
     return np.array(rows)
+
+
+def overrun_ms(trial, spec: ModelSpec, effect: str | None) -> np.ndarray:
+    """Per stance, simulated minus measured stance time (ms), leave-one-out, the simulation sampled at 1 ms past the
+    measured end (``discover`` samples it at the measured times only, so a stance simulated too long shows no
+    duration error there)."""
+    out = []
+    for s in trial.stances:
+        fitted, coefs = identify(spec, trial, [x for x in trial.stances if x.index != s.index], effect)
+        coefs = per_stance_push_off(fitted, coefs, s)
+        law = FittedLaw(fitted, np.asarray(coefs, float), touchdown_moments(fitted, coefs, s))
+        t_max = 1.5 * float(s.t_s[-1]) + 0.05
+        sim = simulate_stance(trial.chain, law, ground_of(fitted, s), s.touchdown, t_max_s=t_max, rtol=fs.RTOL,
+                              atol=fs.ATOL, sample_times_s=np.arange(0.0, t_max, 0.001))
+        out.append(1e3 * (sim.duration_s - float(s.t_s[-1])))
+    return np.array(out)
 
 
 def compare(label: str, cur: np.ndarray, cand: np.ndarray) -> None:
@@ -127,6 +145,9 @@ def main() -> None:
               f"p(> 0) {fs.one_sided_t(work):.2g}")
         compare("identified surface", held_out(trial, spec, None, scales),
                 held_out(trial, spec, "active_push_off", scales, verbose=True))
+        for effect in (None, "active_push_off"):
+            print(f"  identified surface, {'with' if effect else 'without'} push-off: simulated minus measured stance "
+                  f"time {np.round(overrun_ms(trial, spec, effect), 1).tolist()} ms")
         compare("true law", truth_rows(trial, truth, scales, 0.0), truth_rows(trial, truth, scales, 1.0))
         if args.truth_surface:
             ground = SURFACES[truth["per_hop"][0]["surface"]]
