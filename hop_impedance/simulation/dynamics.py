@@ -38,7 +38,6 @@ the equations of the fixed coordinates then require *is* the constraint force
 from __future__ import annotations
 
 import functools
-
 from dataclasses import dataclass, replace
 from functools import cached_property
 
