@@ -193,11 +193,10 @@ def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None) ->
     tangent : ndarray, shape (N, 5)
         ``int g(t) dE_k`` of :data:`ELASTIC_ALL`; needed only with a tangent-form activation.
     """
-    t_s, dr, dw, s_int = (np.asarray(a, float) for a in (t_s, dr, dw, s_int))
-    cols = {"k0": dr, "k1": dr**2 / 2, "k2": dr**3 / 3, "k3": s_int, "b0": dw, "b1": dw**2 / 2}
-    if spec.rate_form == "speed":
-        cols["k3"] = s_speed
-    el = [cols[e] for e in elastic_terms(spec)]
+    t_s, dr, dw, s_int = np.asarray(t_s, float), np.asarray(dr, float), np.asarray(dw, float), np.asarray(s_int, float)
+    # only the columns the spec uses: the simulator builds this matrix at every step (FittedLaw.moments_nm)
+    el = [dr if e == "k0" else dr**2 / 2 if e == "k1" else dr**3 / 3 if e == "k2"
+          else s_speed if spec.rate_form == "speed" else s_int for e in elastic_terms(spec)]
     out = list(el)
     if spec.has("time_dependent_activation"):
         if spec.activation_form == "tangent":
@@ -208,10 +207,13 @@ def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None) ->
             g = activation_modulation(spec, t_s)
             out += [g * e for e in el]
     if spec.has("joint_damping"):
-        out += [cols["b0"], cols["b1"]]
+        out += [dw, dw**2 / 2]
     if spec.has("active_push_off"):
         out.append(push_profile(t_s, spec.onset_s, spec.duration_s))
-    return np.stack(out, axis=-1)
+    matrix = np.empty(dr.shape + (len(out),))  # what np.stack(out, axis=-1) returns, without its generic checks
+    for k, column in enumerate(out):
+        matrix[..., k] = column
+    return matrix
 
 
 def stance_features(spec: ModelSpec, t_s, rho, omega) -> list[np.ndarray]:
@@ -264,58 +266,22 @@ class FittedLaw(ImpedanceLaw):
     def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102
         # all three joints in one call of features() (joint axis before the regressor axis): the same
         # regressors as the fit; the simulator calls this at every step, so it is its hot path
-        if np.ndim(t_s) == 0 and np.ndim(rho) == 1:
-            return self._moments_at(t_s, rho, omega, states, ref)
         dr = np.asarray(rho, float) - ref.rho0_rad
         dw = np.asarray(omega, float) - ref.omega0_rad_s
         s = np.asarray(states, float)
-        t = np.broadcast_to(np.asarray(t_s, float)[..., None], dr.shape)
-        tangent = np.swapaxes(s[..., 6:].reshape(s.shape[:-1] + (len(ELASTIC_ALL), 3)), -1, -2)
+        if dr.ndim == 1 and np.ndim(t_s) == 0:  # one instant: a plain array is cheaper than a broadcast view
+            t = np.full(3, t_s, float)
+        else:
+            t = np.broadcast_to(np.asarray(t_s, float)[..., None], dr.shape)
+        tangent = None  # read by features() only with a tangent-form activation
+        if self.spec.has("time_dependent_activation") and self.spec.activation_form == "tangent":
+            tangent = np.swapaxes(s[..., 6:].reshape(s.shape[:-1] + (len(ELASTIC_ALL), 3)), -1, -2)
         f = features(self.spec, t, dr, dw, s[..., 0:3], s[..., 3:6], tangent)
         return self.touchdown_moment_nm + np.einsum("...jk,jk->...j", f, self.coefficients)
-
-    def _moments_at(self, t_s, rho, omega, states, ref) -> np.ndarray:
-        """:meth:`moments_nm` at one instant, the simulator's call at every step (session 13: the stiffness gate's
-        searches spend most of their time in it): the columns :func:`features` builds for this spec, computed by the
-        same expressions but only those the spec uses and without its broadcasting, then the same ``einsum``, so the
-        result is bit-identical (test_forward_selection) at about a third of the cost."""
-        spec = self.spec
-        dr = rho - ref.rho0_rad
-        el = []
-        for name in elastic_terms(spec):
-            if name == "k0":
-                el.append(dr)
-            elif name == "k1":
-                el.append(dr**2 / 2)
-            elif name == "k2":
-                el.append(dr**3 / 3)
-            else:  # k3: S, or S_speed with the speed form
-                el.append(states[3:6] if spec.rate_form == "speed" else states[0:3])
-        out = list(el)
-        if spec.has("time_dependent_activation"):
-            if spec.activation_form == "tangent":
-                speed = spec.rate_form == "speed"
-                for name in elastic_terms(spec):
-                    m = 6 + 3 * ELASTIC_ALL.index("k3_speed" if name == "k3" and speed else name)
-                    out.append(states[m:m + 3])
-            else:
-                g = activation_modulation(spec, np.full(3, t_s))
-                out += [g * e for e in el]
-        if spec.has("joint_damping"):
-            dw = omega - ref.omega0_rad_s
-            out += [dw, dw**2 / 2]
-        if spec.has("active_push_off"):
-            out.append(push_profile(np.full(3, t_s), spec.onset_s, spec.duration_s))
-        return self.touchdown_moment_nm + np.einsum("...jk,jk->...j", np.stack(out, axis=-1), self.coefficients)
 
     def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102
         w = np.asarray(omega, float)
         w0 = ref.omega0_rad_s
-        if w.ndim == 1 and not self.spec.has("time_dependent_activation"):  # one instant (the simulator's call)
-            out = np.zeros(self.n_states)
-            out[0:3] = (w - w0) * w
-            out[3:6] = (np.abs(w) - np.abs(w0)) * w
-            return out
         rates = [(w - w0) * w, (np.abs(w) - np.abs(w0)) * w]
         if not self.spec.has("time_dependent_activation"):  # the activation integrals stay 0
             return np.concatenate(rates + [np.zeros(w.shape[:-1] + (3 * len(ELASTIC_ALL),))], axis=-1)

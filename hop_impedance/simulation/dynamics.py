@@ -37,7 +37,6 @@ the equations of the fixed coordinates then require *is* the constraint force
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, replace
 from functools import cached_property
 
@@ -318,18 +317,6 @@ def joint_generalized_forces(moments_nm: np.ndarray) -> np.ndarray:
     return out
 
 
-@functools.lru_cache(maxsize=8)
-def _free_index_of(free: bytes) -> np.ndarray:
-    idx = np.flatnonzero(np.frombuffer(free, dtype=bool))
-    idx.setflags(write=False)  # shared by every call with this mask
-    return idx
-
-
-def _free_index(free: np.ndarray) -> np.ndarray:
-    """Indices of the free coordinates, cached by mask (the simulator passes one of two masks at every step)."""
-    return _free_index_of(np.asarray(free, bool).tobytes())
-
-
 def accelerations(
     chain: Chain,
     g: np.ndarray,
@@ -364,7 +351,7 @@ def accelerations(
     rhs = gravity + joint_generalized_forces(moments_nm) - bias
     rhs[0:2] += toe_force_n
     gdd = np.zeros(N_COORDS)
-    idx = _free_index(free)
+    idx = np.flatnonzero(free)
     # LAPACK's gesv, as np.linalg.solve calls it, without numpy's per-call checks (4.8 -> 1.2 us for 5 x 5)
     _, _, solution, info = lapack.dgesv(mass[idx][:, idx], rhs[idx])
     gdd[idx] = solution

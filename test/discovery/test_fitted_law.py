@@ -1,9 +1,7 @@
-"""The identified law's one-instant paths (``FittedLaw._moments_at`` and ``state_rates``, what the simulator calls at
-every step) against the general, broadcasting path through :func:`hop_impedance.discovery.model.features` (the
-regressors the fit uses): bit-identical moments and state rates for every joint-law effect, alone and together, with
-both activation forms and shapes and both rate forms, at random states. The two paths build each column by the same
-expression; a column built differently (another order, a missing term, a state taken from the wrong slot) shows as a
-difference here."""
+"""The identified law at one instant (what the stance simulator calls at every step: a plain time column, the
+activation integrals' view built only where a tangent-form activation reads them) against the same law called with a
+batch of one (the broadcasting call): bit-identical moments and state rates for every joint-law effect, alone and
+together, with both activation forms and shapes and both rate forms, at random states."""
 
 from __future__ import annotations
 
