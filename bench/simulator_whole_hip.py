@@ -44,11 +44,7 @@ from hop_impedance.biomech.analysis import analyze_recording  # noqa: E402
 from hop_impedance.simulation.fit_calibration import median_k0_k1, next_scale, seed_model_fits, table2_k  # noqa: E402
 from hop_impedance.simulation.sensors import SensorConfig, noise_free  # noqa: E402
 from hop_impedance.simulation.simulate import simulate_recording  # noqa: E402
-from hop_impedance.simulation.whole_hip import HIP_PARTS, hip_parts_fits, whole_hip_reference  # noqa: E402
-
-HIP = 2
-#: Issue 17's band for a fitted k0 / k1.
-BAND = 0.15
+from hop_impedance.simulation.whole_hip import BAND, HIP, HIP_PARTS, hip_parts_fits, whole_hip_reference  # noqa: E402
 
 
 def law_scale_with_hip(options: dict, freq_hz: float, hip: np.ndarray) -> dict:

@@ -83,10 +83,7 @@ def seed_lines(report) -> list[str]:
     freqs = [s.hop_frequency_hz for s in report.summaries if math.isfinite(s.hop_frequency_hz)]
     masses = [s.peak_grf_n / s.peak_grf_bw / GRAVITY_M_S2 for s in report.summaries if s.peak_grf_bw > 0]
     stances: dict[str, list[JointStance]] = {}
-    for p in report.profiles:
-        if not p.accepted or p.rejection_reason:
-            continue
-        c = dict(zip(p.terms, p.coefficients))
+    for p, c in accepted_coefficients(report):
         stances.setdefault(p.joint, []).append(JointStance(
             c.get("k0", 0.0), c.get("k1", 0.0), "k1" in p.stance_terms, p.sse_variable, p.sse_constant,
             p.initial_stiffness_nm_per_rad, p.max_stiffness_nm_per_rad))
@@ -111,10 +108,11 @@ def truth_lines(report, recording: str) -> list[str]:
     if not path.is_file():
         return []
     truth = json.loads(path.read_text())
-    fits = []
-    for p in report.profiles:
-        if p.joint == "hip" and p.accepted and not p.rejection_reason:
-            c = dict(zip(p.terms, p.coefficients))
-            fits.append((stamp_ns(p.touchdown_stamp), c.get("k0", 0.0), c.get("k1", 0.0)))
+    fits = [(stamp_ns(p.touchdown_stamp), c.get("k0", 0.0), c.get("k1", 0.0))
+            for p, c in accepted_coefficients(report) if p.joint == "hip"]
     return judge_hip(fits, truth)
 
+
+def accepted_coefficients(report) -> list[tuple]:
+    """(profile, {term: coefficient}) of each accepted profile of the run; a removed term is absent."""
+    return [(p, dict(zip(p.terms, p.coefficients))) for p in report.profiles if p.accepted and not p.rejection_reason]
