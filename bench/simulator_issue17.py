@@ -60,7 +60,13 @@ from hop_impedance.impedance.recording_fits import fit_recording_trial  # noqa: 
 from hop_impedance.impedance.seed_findings import fig7_line  # noqa: E402
 from hop_impedance.simulation.fit_calibration import median_k0_k1, seed_model_fits, table2_k  # noqa: E402
 from hop_impedance.simulation.impedance_laws import TrunkBalance  # noqa: E402
-from hop_impedance.simulation.scenarios import SEED_LIKE_LAW_SCALE, seed_like_options, shoe_pad  # noqa: E402
+from hop_impedance.simulation.scenarios import (  # noqa: E402
+    SEED_LIKE_HOPPER_LAW_SCALE,
+    SEED_LIKE_LAW_SCALE,
+    seed_like_hopper_options,
+    seed_like_options,
+    shoe_pad,
+)
 from hop_impedance.simulation.sensors import SensorConfig, noise_free  # noqa: E402
 from hop_impedance.simulation.simulate import simulate_recording  # noqa: E402
 from hop_impedance.simulation.surface_surprise import unexpected_hard_vs_soft  # noqa: E402
@@ -120,13 +126,9 @@ BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK400_80_LAW_SCALE = {
     2.2: ((0.856853, 1.212848, 1.0), (1.078409, 0.564144, 1.0)),
 }
 #: a_min 0.9, ``--surface rigid --pad 15,3 --push-timing 0.6,0.8 --trunk 500,60``, calibrated on 10-hop trials like
-#: the criteria's (session 12: ``bench/simulator_issue17_search.py --a-min 0.9 --surface rigid --pad 15,3 --push-timing
-#: 0.6,0.8 --trunk 500,60 --hops 10``, 117 s at load 2.5-3; calibration worst 7.0 / 8.7 / 7.4 %; 1.87 Hz: Table 2).
-BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK500_60_LAW_SCALE = {
-    1.53: ((0.951063, 0.887117, 1.0), (1.070895, 1.292072, 1.0)),
-    1.87: ((1.0, 1.0, 1.0), (1.0, 1.0, 1.0)),
-    2.2: ((0.942668, 0.999863, 1.0), (1.037431, 0.952664, 1.0)),
-}
+#: the criteria's (session 12; since session 14 the package's preset, ``scenarios.SEED_LIKE_HOPPER_LAW_SCALE``, which
+#: ``--hopper seed-like`` takes with the rest of ``scenarios.seed_like_hopper_options``).
+BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK500_60_LAW_SCALE = SEED_LIKE_HOPPER_LAW_SCALE
 LAW_SCALES = {"none": None, "seed_like": SEED_LIKE_LAW_SCALE, "bell09": BELL09_LAW_SCALE,
               "bell09_rigid_pad10": BELL09_RIGID_PAD10_LAW_SCALE, "bell09_rigid_pad15_3": BELL09_RIGID_PAD15_3_LAW_SCALE,
               "bell08_rigid_pad15_3": BELL08_RIGID_PAD15_3_LAW_SCALE,
@@ -341,6 +343,9 @@ class VariantArgs(argparse.Namespace):
 
 def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
     """The variant flags :func:`variant_options` reads (this bench's, ``demo_on_variant.py``'s, ``recovery_errors.py``'s)."""
+    parser.add_argument("--hopper", choices=("seed_like_options", "seed-like"), default="seed_like_options",
+                        help="the options the other flags change: scenarios.seed_like_options() (default) or the package's "
+                             "preset scenarios.seed_like_hopper_options() (session 12's variant; give --surface rigid too)")
     parser.add_argument("--bell", type=float, default=None, metavar="A_MIN",
                         help="the bell activation's floor instead of seed_like_options' 0.7 (1: no bell)")
     parser.add_argument("--law-scale", choices=tuple(LAW_SCALES), default="none",
@@ -358,10 +363,16 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
-    """``seed_like_options()`` with the command line's variant, and a one-line description of it."""
-    options = seed_like_options()
-    said = [f"bell a_min {args.bell if args.bell is not None else options['bell_activation_min']}",
-            f"law Table 2{'' if args.law_scale == 'none' else ' x ' + args.law_scale}"]
+    """``seed_like_options()`` (``--hopper seed-like``: ``seed_like_hopper_options()``) with the command line's variant,
+    and a one-line description of it."""
+    preset = args.hopper == "seed-like"
+    options = seed_like_hopper_options() if preset else seed_like_options()
+    said_law = f"law Table 2{'' if args.law_scale == 'none' else ' x ' + args.law_scale}"
+    said = [f"bell a_min {args.bell if args.bell is not None else options['bell_activation_min']}", said_law]
+    if preset:
+        said = ["its own bell a_min 0.9, shoe pad 15 mm n 3, push-off 0.6 / 0.8, trunk 500 / 60 and law scale"
+                + ("" if args.surface == "rigid" else " (calibrated on the rigid plate)")]
+        said += [f"bell a_min {args.bell}"] * (args.bell is not None) + [said_law] * (args.law_scale != "none")
     if args.bell is not None:
         options["bell_activation_min"] = None if args.bell == 1.0 else args.bell
     if LAW_SCALES[args.law_scale] is not None:
@@ -386,7 +397,7 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     if args.contact_ahead is not None:
         options["contact_ahead_m"] = args.contact_ahead
         said.append(f"contact {args.contact_ahead:g} m ahead of the toe marker")
-    return options, "scenarios.seed_like_options(), " + ", ".join(said)
+    return options, f"scenarios.{'seed_like_hopper_options' if preset else 'seed_like_options'}(), " + ", ".join(said)
 
 
 def main() -> None:
@@ -401,8 +412,9 @@ def main() -> None:
     parser.add_argument("--write", action="store_true", help="write the table into docs/simulator.md (defaults only)")
     args = parser.parse_args()
     freqs = tuple(f for f in FREQS if f in floats(args.freqs))
-    variant = any((args.bell is not None, args.law_scale != "none", args.surface != "hard", args.pad, args.posture,
-                   args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS, args.no_seed001, args.seed != 1))
+    variant = any((args.hopper != "seed_like_options", args.bell is not None, args.law_scale != "none", args.surface != "hard",
+                   args.pad, args.posture, args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS,
+                   args.no_seed001, args.seed != 1))
     if args.write and variant:
         parser.error("--write stores seed_like_options' table only")
     try:

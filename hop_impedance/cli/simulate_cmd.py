@@ -12,6 +12,9 @@ SIMULATE = "hop_impedance.simulation.simulate:simulate_recording"
 SUBJECT = "hop_impedance.simulation.scenarios:SEED_SUBJECT"
 EFFECTS = "hop_impedance.simulation.scenarios:Effects"
 SENSORS = "hop_impedance.simulation.sensors:SensorConfig"
+#: The hoppers of scenarios.HOPPERS (named here so that building the parser imports no simulation module;
+#: test/simulation/test_sim_seed_like_hopper.py checks the two agree).
+HOPPERS = ("default", "seed-like")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,6 +34,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=OptionDefault(SIMULATE, "seed"),
                    help="seed of variability and noise (default %(default)s)")
     p.add_argument("--out", required=True, help="output recording, .mcap")
+    p.add_argument("--hopper", choices=HOPPERS, default="default",
+                   help="default: the four-segment hopper with the Table 2 law; seed-like: issue 17's hopper that hops "
+                   "like the seed's subjects (scenarios.seed_like_hopper_options: toe-tip contact, flexed landing, "
+                   "bell activation, push-off lasting to take-off, trunk balance, shoe pad; law calibrated so its fit "
+                   "returns Table 2), calibrated on the force plate: use it with --surface rigid (default %(default)s)")
     p.add_argument("--tuned-for", choices=SURFACES, default=None,
                    help="surface the law is tuned (calibrated) for; default --surface. "
                    "--tuned-for soft --surface hard = unexpected hard surface (seed 001)")
@@ -88,6 +96,7 @@ def _hops(text: str) -> tuple[int, ...]:
 
 def run(args: argparse.Namespace) -> int:
     from hop_impedance.recording import Subject
+    from hop_impedance.simulation.scenarios import HOPPERS as HOPPER_OPTIONS
     from hop_impedance.simulation.scenarios import Effects
     from hop_impedance.simulation.sensors import SensorConfig
     from hop_impedance.simulation.simulate import simulate_recording, write_simulated_recording
@@ -112,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
     rec, truth = simulate_recording(
         args.freq, args.surface, args.hops, args.seed, effects, sensors, subject=subject,
         tuned_for=args.tuned_for, unexpected_surface=args.unexpected, unexpected_hops=_hops(args.unexpected_hops),
-        variability=not args.no_variability, generator={"argv": sys.argv[1:]},
+        variability=not args.no_variability, generator={"argv": sys.argv[1:], "hopper": args.hopper},
+        **HOPPER_OPTIONS[args.hopper](subject),
     )
     tpath = write_simulated_recording(args.out, rec, truth)
     n = len(truth["stances"])
