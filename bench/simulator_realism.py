@@ -10,6 +10,7 @@ Usage::
     .venv/bin/python bench/simulator_realism.py --seed-like --write   # its tables into docs/simulator.md
     .venv/bin/python bench/simulator_realism.py --seed-like --bell 1 --fits --freqs 1.53,1.87,2.2  # without the bell, with fits
     .venv/bin/python bench/simulator_realism.py --seed-like --fit-law --fits  # the law whose fit returns Table 2
+    .venv/bin/python bench/simulator_realism.py --hopper seed-like    # the package's preset (the bundled recordings')
 
 Every simulated figure is measured by the analysis (``hop-impedance analyze``:
 ``analyze_recording`` + ``io.analyze_json.analysis_to_json``, stance detection and 2D inverse
@@ -58,9 +59,11 @@ from hop_impedance.recording import MARKER_NAMES
 from hop_impedance.simulation.scenarios import (
     DEFAULT_TOUCHDOWN_RHO,
     PUSH_OFF_TIMING,
+    SEED_LIKE_HOPPER_SURFACE,
     SEED_LIKE_LAW_SCALE,
     TRUNK_BALANCE,
     Effects,
+    seed_like_hopper_options,
     seed_like_options,
     toe_tip_ahead_m,
 )
@@ -122,6 +125,12 @@ def measure(freq_hz: float, hops: int = 6, seed: int = 1, trunk: bool = False, f
                                     touchdown_rho_rad=posture, trunk_balance=TRUNK_BALANCE if trunk else None,
                                     flight=flight, contact_ahead_m=contact_ahead_m, push_timing=push_timing,
                                     bell_activation_min=bell_activation_min, law_scale=law_scale)
+    return summarise(freq_hz, rec, truth, fits)
+
+
+def measure_hopper(freq_hz: float, options: dict, surface: str, hops: int = 6, seed: int = 1, fits: bool = False) -> dict:
+    """:func:`measure`'s figures for a hopper given as ``simulate_recording`` options on ``surface`` (``--hopper``)."""
+    rec, truth = simulate_recording(freq_hz, surface, hops, seed=seed, sensors=noise_free(SensorConfig()), **options)
     return summarise(freq_hz, rec, truth, fits)
 
 
@@ -369,6 +378,28 @@ README_BEGIN = "<!-- simulator_realism table begin -->"
 README_END = "<!-- simulator_realism table end -->"
 
 
+def run_hopper(args: argparse.Namespace) -> None:
+    """``--hopper seed-like``: the realism table of the package's preset on its surface (printed, not written)."""
+    options = seed_like_hopper_options()
+    wanted = None if args.freqs is None else [float(v) for v in args.freqs.split(",")]
+    t0 = time.perf_counter()
+    results = {}
+    for f in (*SEED_TABLE1, 2.4):
+        if wanted is not None and not any(abs(f - w) < 1e-6 for w in wanted):
+            results[f] = failed(f, "not asked for (--freqs)")
+            continue
+        try:
+            results[f] = measure_hopper(f, options, SEED_LIKE_HOPPER_SURFACE, fits=args.fits)
+        except ValueError as exc:
+            results[f] = failed(f, str(exc))
+    print(table(results, hopexo_means()))
+    for n in (n for f in results for n in results[f]["notes"]):
+        print("note:", n)
+    print(f"(scenarios.seed_like_hopper_options() on the {SEED_LIKE_HOPPER_SURFACE} plate with its shoe pad, "
+          f"{min(r['n_stances'] for r in results.values())}-{max(r['n_stances'] for r in results.values())} analysed "
+          f"stances per frequency; measured in {time.perf_counter() - t0:.0f} s)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true",
@@ -400,7 +431,16 @@ def main() -> None:
                         help="also the per-stance Eq. 3 fits (k0, k1, b0) that analyze adds, medians against Table 2")
     parser.add_argument("--freqs", default=None,
                         help="measure only these of 1.53,1.87,2.2,2.4 (the others print as nan; not with --write)")
+    parser.add_argument("--hopper", choices=("seed-like",), default=None,
+                        help="the package's preset scenarios.seed_like_hopper_options() on its rigid plate (the hopper "
+                             "of the bundled Table 1 recordings since session 14); the other hopper flags are ignored; "
+                             "not with --write (the README's table is the lead's)")
     args = parser.parse_args()
+    if args.hopper:
+        if args.write:
+            parser.error("--hopper prints the table only (the README's and docs' tables are written by the lead)")
+        run_hopper(args)
+        return
     contact = toe_tip_ahead_m() if args.contact == "toe_tip" else 0.0
     posture = DEFAULT_TOUCHDOWN_RHO
     push_timing = PUSH_OFF_TIMING

@@ -149,19 +149,25 @@ def test_bundled_simulated_recordings_true_moments(truth_path):
     take-off release, which 100 Hz markers cannot follow) must stay below
     2 % (ankle), 4 % (knee) and 25 % (hip) of that joint's peak moment: the hip
     moment is the smallest and collects the double-differentiated marker noise
-    of the three segments below it (measured worst cases: 1.1 %, 3.0 %, 20.3 %;
-    the noise-free round trip is tested in test/simulation/).
+    of the three segments below it (measured worst cases on the default
+    hopper's recordings: 1.1 %, 3.0 %, 20.3 %; on session 14's seed-like Table 1
+    recordings 2.19 % (2.2 Hz ankle, over its 2 %: docs/simulator.md, session
+    14), 3.1 %, 11.4 %, by /tmp-free `nice -n 19 .venv/bin/python -m pytest
+    test/biomech/test_analysis.py -k true_moments`; the noise-free round trip is tested in test/simulation/). Stances are
+    matched by the nearest detected touchdown: on the shoe pad of session 14's
+    Table 1 recordings the plate's force crosses the detector's level 2.0-2.9 ms
+    after the truth's contact begins.
     """
     from hop_impedance.io.recording_io import load_recording
 
     rec = load_recording(truth_path.with_name(truth_path.name.replace(".truth.json", ".mcap")))
     truth = json.loads(truth_path.read_text())
-    ours = {round(s.touchdown_s, 2): s for s in analyze_recording(rec).stances if s.joints is not None}
+    ours = [s for s in analyze_recording(rec).stances if s.joints is not None]
     limits = (0.02, 0.04, 0.25)
     checked = 0
     for ts in truth["stances"]:
-        s = ours.get(round(ts["touchdown_s"], 2))
-        assert s is not None, f"stance at {ts['touchdown_s']:.3f} s not analysed"
+        s = min(ours, key=lambda s: abs(s.touchdown_s - ts["touchdown_s"]))  # the detector's touchdown: within 5 ms
+        assert abs(s.touchdown_s - ts["touchdown_s"]) < 0.005, f"stance at {ts['touchdown_s']:.3f} s not analysed"
         t = np.asarray(ts["samples"]["t_s"]) - ts["touchdown_s"]
         true_m = np.asarray(ts["samples"]["moments_nm"])
         mid = slice(int(0.1 * len(t)), int(0.9 * len(t)))

@@ -51,8 +51,13 @@ def test_gap_stance_rejected_as_message_loss_others_unchanged(rec, clean):
     outside = [c for c in clean.stances if c.takeoff_s < start or c.touchdown_s > start + 1.0]
     accepted = [s for s in holed.stances if s.rejection_reason is None]
     assert len(accepted) == len(outside) == 7
-    for s, c in zip(accepted, outside):
-        assert abs(s.touchdown_s - c.touchdown_s) < 1e-6 and abs(s.takeoff_s - c.takeoff_s) < 1e-6
+    first_after = min(i for i, c in enumerate(outside) if c.touchdown_s > start)
+    for i, (s, c) in enumerate(zip(accepted, outside)):
+        # the first stance after the gap has a shorter flight for its baseline: on the shoe pad of session 14's
+        # recording, whose force crosses the detector's 16 N level at ~3 N/ms, its events move by +2.4 / -4.3 us
+        # (this test's figures); every other stance's to 1e-6 s
+        tol = 1e-5 if i == first_after else 1e-6
+        assert abs(s.touchdown_s - c.touchdown_s) < tol and abs(s.takeoff_s - c.takeoff_s) < tol
         peak = np.max(np.abs(c.joints.moment_nm), axis=0)
         # the first stance after the gap has a shorter flight for its baseline and filter start: 0.02 N m
         assert np.all(np.max(np.abs(s.joints.moment_nm - c.joints.moment_nm), axis=0) < 1e-3 * peak)

@@ -38,7 +38,8 @@ def test_the_stage_scales_the_offline_model_and_emits_each_stance_5_ms_after_its
     stage = StanceAnalysisStage(None, rec.subject.body_mass_kg, offline.options, post_pad_s=0.005, subject=rec.subject)
     emitted, rest = _stream(stage, recording_span(rec))
     assert stage.model == offline.model  # the frames up to the first take-off, as analyze takes them
-    assert stage.notes == ["body model scaled from 61 marker frames (0.60 s)"]
+    # the frames up to the first take-off: the 0.4 s lead-in and the first stance (0.265 s in session 14's recording)
+    assert stage.notes == ["body model scaled from 67 marker frames (0.66 s)"]
     assert [(s.touchdown_s, s.takeoff_s) for _, s in emitted] == [(s.touchdown_s, s.takeoff_s) for s in offline.stances]
     assert rest == []
     for at, s in emitted:  # data reached take-off + 5 ms (force) and the marker frame at or before it

@@ -188,7 +188,7 @@ def test_seeded_loss_is_counted_every_stance_has_a_row_and_exit_is_nonzero(tmp_p
     assert len(rows) == len(report.summaries) == 10  # every stance the detector saw has a row
     assert any("message loss" in r.rejection_reason for r in rows)
     contact = [r.contact_time_s for r in rows]
-    assert max(contact) < 0.25  # no two stances merged (0.21 s each)
+    assert max(contact) < 0.35  # no two stances merged (0.25-0.27 s each, session 14's recording)
 
 
 def test_missing_subject_takes_the_parameters_after_the_wait(tmp_path, capfd, rec):
@@ -223,7 +223,7 @@ def test_seeded_loss_under_processes_every_stance_has_a_row_in_table_json_and_mc
     table_rows = [line for line in captured.out.splitlines() if line[:3].strip().isdigit()]
     assert len(rows) == len(mcap_rows) == len(table_rows) == 10  # the bundled trial's 10 hops, each one row
     assert [r["touchdown_stamp_ns"] for r in rows] == sorted(stamp_ns(m.touchdown_stamp) for m in mcap_rows)
-    assert max(r["contact_time_s"] for r in rows) < 0.25  # no two stances merged (0.21 s each)
+    assert max(r["contact_time_s"] for r in rows) < 0.35  # no two stances merged (0.25-0.27 s each)
     for r in rows:
         assert all(r["accepted"]) or r["rejection_reason"]
         if r["force_samples_lost_in_stance"]:
