@@ -15,6 +15,8 @@ touched.
 
 Usage: nice -n 19 .venv/bin/python bench/demo_on_variant.py [--freq 2.2] [--seed 13] [variant flags]
 e.g.   ... --bell 0.9 --law-scale bell09_rigid_pad15_3 --surface rigid --pad 15,3
+       ... --hopper seed-like --surface rigid   (the package's preset: since session 14 the bundled Table 1
+           recordings' hopper, so with --seed 13 this prints what make demo prints)
 """
 
 from __future__ import annotations

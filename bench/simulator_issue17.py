@@ -7,6 +7,7 @@ Usage::
     nice -n 10 .venv/bin/python bench/simulator_issue17.py --bell 0.85       # another bell floor a_min (1: no bell)
     nice -n 10 .venv/bin/python bench/simulator_issue17.py --law-scale seed_like   # Table 2 x SEED_LIKE_LAW_SCALE
     nice -n 19 .venv/bin/python bench/simulator_issue17.py --bell 0.9 --law-scale bell09 --surface rigid --pad 10,2
+    nice -n 19 .venv/bin/python bench/simulator_issue17.py --hopper seed-like --surface rigid   # the package's preset
 
 Variants (issue 17, session 11: a mechanism for the seed's peaked force that the fit does not absorb), each
 on top of ``seed_like_options()``: ``--surface`` (the trial's and calibration's surface: seed 001's hard, default,
