@@ -15,9 +15,9 @@ the fit is physically credible (:func:`controller_rejection`):
   b_eq in ``[-damping_tolerance, 0)`` is published as 0 (valid) and a more
   negative one makes the joint invalid. Choice: the seed found damping
   negligible, and the ordinary least-squares b_eq of such joints scatters
-  around 0 (-0.2 to -1.3 N m s/rad on sim_2p20hz_hard, whose law has
-  b0 = 0.5); without the tolerance nearly every stance of the bundled
-  recordings would be invalid. What reaches the controller as valid always
+  around 0 (-1.79 to -0.15 N m s/rad at the ankle and knee of
+  sim_2p20hz_hard, whose law has b0 = 0.5); without the tolerance nearly
+  every stance of the bundled recordings would be invalid. What reaches the controller as valid always
   has b_eq >= 0 (:func:`controller_damping`).
 - k0 within a factor ``k0_factor`` (5) of the seed's Table 2 k0 for that
   joint, scaled by body mass (``k0_ref * mass / 54.8 kg``, the seed subjects'
