@@ -153,8 +153,8 @@ def test_bundled_simulated_recordings_true_moments(truth_path):
     hopper's recordings: 1.1 %, 3.0 %, 20.3 %; on session 14's seed-like Table 1
     recordings 2.19 % (2.2 Hz ankle: the 12 Hz low-pass on its narrower, bell-shaped moment, 5-7 N m spread over
     the stance, not noise; the ankle's bound was 2 % for the default hopper's 1.1 % and is 2.5 % since: docs/simulator.md,
-    session 14), 3.1 %, 11.4 %, by /tmp-free `nice -n 19 .venv/bin/python -m pytest
-    test/biomech/test_analysis.py -k true_moments`; the noise-free round trip is tested in test/simulation/). Stances are
+    session 14), 3.1 %, 11.4 %, printed by `nice -n 19 .venv/bin/python
+    bench/simulator_recordings_id.py`; the noise-free round trip is tested in test/simulation/). Stances are
     matched by the nearest detected touchdown: on the shoe pad of session 14's
     Table 1 recordings the plate's force crosses the detector's level 2.0-2.9 ms
     after the truth's contact begins.
