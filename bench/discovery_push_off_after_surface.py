@@ -15,9 +15,14 @@ with the table body (``discover`` keeps the table's thigh/HAT split on both, ``n
 4. ``--gate``: the held-out stiffness gate (``stiffness_gate.shoot``, 2 folds, Levenberg-Marquardt to convergence)
    on the surface model and on the push-off model: its shrink and p against ALPHA / 7;
 5. ``--truth-surface``: step 2 again with the surface law replaced by the truth's (``c = k^(-1/n)``, ``p = 1/n``, its
-   damping): whether the identified surface absorbs what the push-off would explain.
+   damping): whether the identified surface absorbs what the push-off would explain;
+6. ``--shoot-surface`` (session 14, issue 16's next step): the surface law identified through the simulation instead
+   of from the toe marker: ``k``, ``n`` and the damping (log factors on the toe fit's) chosen by Nelder-Mead on the
+   mean in-sample forward gap of all stances, for each model on its own (the surface model, and the surface +
+   push-off model with its joint law and push-off as identified), then step 2 with each model's shot surface.
 
 Usage: .venv/bin/python bench/discovery_push_off_after_surface.py [FILE.mcap ...] [--gate] [--truth-surface]
+[--shoot-surface]
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import minimize
 
 from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery import stiffness_gate as sg
@@ -106,10 +112,39 @@ def truth_rows(trial, truth: dict, scales: np.ndarray, push_scale: float) -> np.
         spec, coefs = truth_law(hop)
         coefs[:, feature_names(spec).index("push")] *= push_scale
         law = FittedLaw(spec, coefs, np.asarray(hop["law"]["M_td"], float))
-        sim = simulate_stance(trial.chain, law, SURFACES[hop["surface"]], s.touchdown,
-                              t_max_s=1.5 * float(s.t_s[-1]) + 0.05, rtol=fs.RTOL, atol=fs.ATOL, sample_times_s=s.t_s)
-        rows.append(term_row(fs._gap_of(sim, s, 0.0, scales, samples=True)))
+        sim = fs.simulate_for_gap(trial.chain, law, SURFACES[hop["surface"]], s)
+        rows.append(term_row(fs._gap_of(sim, s, 0.0, scales, fs.take_off_level_n(trial), samples=True)))
     return np.array(rows)
+
+
+def surface_spec(spec: ModelSpec, k: float, n: float, d: float) -> ModelSpec:
+    """``spec`` on the ground ``Fz = k |y|^n - d y'`` (the discovery's ``c = k^(-1/n)``, ``p = 1/n``)."""
+    return replace(spec, compliance=(k ** (-1.0 / n), 1.0 / n), ground_damping_n_s_m=d)
+
+
+def shoot_surface(rec, trial, spec: ModelSpec, effect: str | None) -> ModelSpec:
+    """``spec`` (+ ``effect``) with its surface law chosen by the simulation (module docstring, step 6)."""
+    fitted, coefs = identify(spec, trial, trial.stances, effect)
+    c, p = fitted.compliance
+    k0, n0, d0 = c ** (-1.0 / p), 1.0 / p, max(fitted.ground_damping_n_s_m, 1.0)
+
+    def law(x: np.ndarray) -> ModelSpec:
+        return surface_spec(fitted, k0 * np.exp(x[0]), n0 * np.exp(np.clip(x[1], -0.7, 0.7)), d0 * np.exp(x[2]))
+
+    with fs.HeldOutEvaluator(rec, trial) as ev:
+        def mean_gap(x: np.ndarray) -> float:
+            return float(np.mean(np.minimum(ev.stance_gaps(law(x), coefs), 10.0)))
+
+        start = mean_gap(np.zeros(3))
+        res = minimize(mean_gap, np.zeros(3), method="Nelder-Mead",
+                       options={"initial_simplex": np.vstack([np.zeros(3), 0.5 * np.eye(3)]), "maxfev": 80,
+                                "xatol": 0.02, "fatol": 0.01 * start})
+    shot = law(res.x)
+    c, p = shot.compliance
+    print(f"  shot surface ({effect or 'surface model'}): k {c ** (-1 / p):.3g} n {1 / p:.2f} damping "
+          f"{shot.ground_damping_n_s_m:.0f} N s/m (toe fit: k {k0:.3g} n {n0:.2f} damping {d0:.0f}); in-sample gap "
+          f"{start:.5f} -> {res.fun:.5f} in {res.nfev} evaluations", flush=True)
+    return replace(spec, compliance=shot.compliance, ground_damping_n_s_m=shot.ground_damping_n_s_m)
 
 
 def gate_figures(rec, trial, spec: ModelSpec) -> None:
@@ -128,6 +163,7 @@ def main() -> None:
     ap.add_argument("files", nargs="*", default=[f"../shared/foreign/{f}.mcap" for f in FILES])
     ap.add_argument("--gate", action="store_true", help="also the held-out stiffness gate on both models")
     ap.add_argument("--truth-surface", action="store_true", help="also leave-one-out with the truth's surface law")
+    ap.add_argument("--shoot-surface", action="store_true", help="also leave-one-out with each model's shot surface")
     args = ap.parse_args()
     for path in map(Path, args.files):
         rec = load_recording(path)
@@ -155,6 +191,11 @@ def main() -> None:
                                 ground_damping_n_s_m=ground.damping_n_s_m)
             compare("truth's surface law", held_out(trial, true_spec, None, scales),
                     held_out(trial, true_spec, "active_push_off", scales))
+        if args.shoot_surface:
+            shot = shoot_surface(rec, trial, spec, None), shoot_surface(rec, trial, spec, "active_push_off")
+            fs._CONTEXT.update(rec=rec, trial=trial, scales=scales)  # the evaluator cleared it
+            compare("shot surface", held_out(trial, shot[0], None, scales), held_out(trial, shot[1], "active_push_off",
+                                                                                      scales))
         if args.gate:
             gate_figures(rec, trial, spec)
 
