@@ -40,9 +40,9 @@ FLIGHT_MARGIN_S = 0.03
 #: ``bench/discovery_stance_edges.py``). The default reads it from the low-passed kinematics, whose filter runs across
 #: the impact: the TRUE law simulated from it takes off 5-11 ms late on rigid grounds. TOUCHDOWN_FROM_FLIGHT: the
 #: state extrapolated from the flight's markers (:func:`_flight_touchdown_state`; a quadratic over the last
-#: TOUCHDOWN_FIT_S): that error's mean falls to -3.5..+7.4 ms, but per stance it spreads to -21..+23 ms (longer
+#: TOUCHDOWN_FIT_S): that error's mean per file is -8.3..+7.4 ms and per stance it spreads to -21..+23 ms (longer
 #: windows make stances collapse). TOUCHDOWN_CUTOFF_HZ: the state's kinematics at another cut-off (None: the
-#: analysis'); 25 / 40 Hz leave +8 / +6 ms on the outside rigid nulls and widen the spread.
+#: analysis'); 25 Hz leaves +8..+9 ms on two outside rigid nulls, 40 Hz -4.4 / +5.7 ms with stances to -19 ms.
 TOUCHDOWN_FROM_FLIGHT = False
 TOUCHDOWN_FIT_S = 0.08
 TOUCHDOWN_FIT_DEGREE = 2
