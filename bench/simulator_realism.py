@@ -403,19 +403,26 @@ def out_cells(results: dict) -> list[str]:
             for name, cells in out.items()]
 
 
-def run_hopper(args: argparse.Namespace) -> tuple[dict, str]:
-    """``--hopper seed-like``: the realism figures of the package's preset on its surface, and the setup line."""
-    options = seed_like_hopper_options()
-    wanted = None if args.freqs is None else [float(v) for v in args.freqs.split(",")]
+def measure_all(freqs: str | None, measure_one) -> dict:
+    """``measure_one(f)`` at each seed frequency and 2.4 Hz (only those in ``freqs``, '1.53,2.2', if given); a trial
+    that fails (e.g. no calibrated hop) is reported by :func:`failed` instead."""
+    wanted = None if freqs is None else [float(v) for v in freqs.split(",")]
     results = {}
     for f in (*SEED_TABLE1, 2.4):
         if wanted is not None and not any(abs(f - w) < 1e-6 for w in wanted):
             results[f] = failed(f, "not asked for (--freqs)")
             continue
         try:
-            results[f] = measure_hopper(f, options, SEED_LIKE_HOPPER_SURFACE, fits=args.fits)
-        except ValueError as exc:
+            results[f] = measure_one(f)
+        except ValueError as exc:  # e.g. no calibrated hop, or a trial that stops before a second stance
             results[f] = failed(f, str(exc))
+    return results
+
+
+def run_hopper(args: argparse.Namespace) -> tuple[dict, str]:
+    """``--hopper seed-like``: the realism figures of the package's preset on its surface, and the setup line."""
+    options = seed_like_hopper_options()
+    results = measure_all(args.freqs, lambda f: measure_hopper(f, options, SEED_LIKE_HOPPER_SURFACE, fits=args.fits))
     setup = (f"scenarios.seed_like_hopper_options() (the hopper of the bundled Table 1 recordings) on the "
              f"{SEED_LIKE_HOPPER_SURFACE} plate with its shoe pad, "
              f"{min(r['n_stances'] for r in results.values())}-{max(r['n_stances'] for r in results.values())} "
@@ -491,19 +498,11 @@ def main() -> None:
                        or (args.seed_like and bell_override is not None) or args.fit_law):
         parser.error("--write writes the chosen configuration only: not with --freqs, --push-timing, --activation, "
                      "or --posture / --bell with --seed-like")
-    wanted = None if args.freqs is None else [float(v) for v in args.freqs.split(",")]
     t0 = time.perf_counter()
-    results = {}
-    for f in (*SEED_TABLE1, 2.4):
-        if wanted is not None and not any(abs(f - w) < 1e-6 for w in wanted):
-            results[f] = failed(f, "not asked for (--freqs)")
-            continue
-        try:
-            results[f] = measure(f, trunk=args.trunk, flight=args.flight, posture=posture, contact_ahead_m=contact,
-                                 push_timing=push_timing, effects=Effects(time_activation=args.activation),
-                                 bell_activation_min=args.bell, fits=args.fits, law_scale=law_scale)
-        except ValueError as exc:  # e.g. no calibrated hop, or a trial that stops before a second stance
-            results[f] = failed(f, str(exc))
+    effects = Effects(time_activation=args.activation)
+    results = measure_all(args.freqs, lambda f: measure(
+        f, trunk=args.trunk, flight=args.flight, posture=posture, contact_ahead_m=contact, push_timing=push_timing,
+        effects=effects, bell_activation_min=args.bell, fits=args.fits, law_scale=law_scale))
     setup = (f"{'with' if args.trunk else 'without'} trunk balance, {args.flight} flight, touchdown posture "
              f"ankle {posture[0]:.2f}, knee {posture[1] - np.pi:.2f}, hip {posture[2] - np.pi:.2f} rad, "
              f"ground contact {'at the toe marker' if not contact else f'{contact:.3f} m ahead of the toe marker (toe tip)'}, "

@@ -62,18 +62,6 @@ def test_the_bundled_2p20_recording_is_valid_at_ankle_and_knee_and_its_hip_where
     assert controller_damping(-0.9) == 0.0 and controller_damping(1.5) == 1.5
 
 
-def test_a_stiffness_on_its_bound_is_zero_and_a_negative_one_is_not(fitted):
-    analysis, fits = fitted
-    stance, fit = analysis.stances[1], fits[1]["knee"]
-    d = stance.joints.joint("knee")
-    k_eq, b_eq, _ = equivalent_linear_impedance(d["angle_rad"], d["angular_velocity_rad_s"], d["moment_nm"])
-    mass, f = analysis.subject.body_mass_kg, stance.hop_frequency_hz
-    at_bound = replace(fit, stiffness=np.array([250.0, 80.0, -1.7e-13]))
-    assert controller_rejection("knee", at_bound, k_eq, b_eq, f, mass) is None
-    slightly = replace(fit, stiffness=np.array([250.0, 80.0, -0.01]))
-    assert controller_rejection("knee", slightly, k_eq, b_eq, f, mass).startswith("implausible: K(rho) reaches -0.01")
-
-
 def test_table2_band_is_mass_scaled_and_nearest_frequency():
     lo, hi, k1_max = table2_band("ankle", 2.18, 2 * SEED_BODY_MASS_KG, PlausibilityBounds())
     k0, k1 = TABLE2_COEFFICIENTS[2.20]["ankle"]
@@ -95,5 +83,9 @@ def test_implausible_fits_are_named(fitted):
     assert "implausible: k0 10.0 N m/rad outside" in controller_rejection("knee", tiny, k_eq, b_eq, f, mass)
     negative = replace(fit, stiffness=np.array([50.0, -3.0]))
     assert controller_rejection("knee", negative, k_eq, b_eq, f, mass).startswith("implausible: K(rho) reaches -3 N m/rad")
+    slightly = replace(fit, stiffness=np.array([250.0, 80.0, -0.01]))
+    assert controller_rejection("knee", slightly, k_eq, b_eq, f, mass).startswith("implausible: K(rho) reaches -0.01")
+    at_bound = replace(fit, stiffness=np.array([250.0, 80.0, -1.7e-13]))  # K on the QP's K >= 0 bound: round-off
+    assert controller_rejection("knee", at_bound, k_eq, b_eq, f, mass) is None
     huge = replace(fit, coefficients={**fit.coefficients, "k1": 1e5})
     assert controller_rejection("knee", huge, k_eq, b_eq, f, mass).startswith("implausible: |k1|")
