@@ -19,10 +19,13 @@ with the table body (``discover`` keeps the table's thigh/HAT split on both, ``n
 6. ``--shoot-surface`` (session 14, issue 16's next step): the surface law identified through the simulation instead
    of from the toe marker: ``k``, ``n`` and the damping (log factors on the toe fit's) chosen by Nelder-Mead on the
    mean in-sample forward gap of all stances, for each model on its own (the surface model, and the surface +
-   push-off model with its joint law and push-off as identified), then step 2 with each model's shot surface.
+   push-off model with its joint law and push-off as identified), then step 2 with each model's shot surface;
+   ``--surface-folds K``: instead, held out like the stiffness gate: per fold, each model's joint law identified and
+   its surface shot on the fold's training stances, the held-out stances simulated with them, the push-off's shrink
+   and p over every stance's held-out gap.
 
 Usage: .venv/bin/python bench/discovery_push_off_after_surface.py [FILE.mcap ...] [--gate] [--truth-surface]
-[--shoot-surface]
+[--shoot-surface [--surface-folds 2]]
 """
 
 from __future__ import annotations
@@ -122,9 +125,12 @@ def surface_spec(spec: ModelSpec, k: float, n: float, d: float) -> ModelSpec:
     return replace(spec, compliance=(k ** (-1.0 / n), 1.0 / n), ground_damping_n_s_m=d)
 
 
-def shoot_surface(rec, trial, spec: ModelSpec, effect: str | None) -> ModelSpec:
-    """``spec`` (+ ``effect``) with its surface law chosen by the simulation (module docstring, step 6)."""
-    fitted, coefs = identify(spec, trial, trial.stances, effect)
+def shoot_surface(rec, trial, spec: ModelSpec, effect: str | None, train: list | None = None) -> ModelSpec:
+    """``spec`` (+ ``effect``) with its surface law chosen by the simulation (module docstring, step 6), on the
+    stances of ``train`` (None: all)."""
+    train = trial.stances if train is None else train
+    indices = tuple(s.index for s in train)
+    fitted, coefs = identify(spec, trial, train, effect)
     c, p = fitted.compliance
     k0, n0, d0 = c ** (-1.0 / p), 1.0 / p, max(fitted.ground_damping_n_s_m, 1.0)
 
@@ -133,7 +139,8 @@ def shoot_surface(rec, trial, spec: ModelSpec, effect: str | None) -> ModelSpec:
 
     with fs.HeldOutEvaluator(rec, trial) as ev:
         def mean_gap(x: np.ndarray) -> float:
-            return float(np.mean(np.minimum(ev.stance_gaps(law(x), coefs), 10.0)))
+            runs = ev.stance_residuals(law(x), [coefs], indices)[0]
+            return float(np.mean(np.minimum([r["gap"] for r in runs], 10.0)))
 
         start = mean_gap(np.zeros(3))
         res = minimize(mean_gap, np.zeros(3), method="Nelder-Mead",
@@ -145,6 +152,26 @@ def shoot_surface(rec, trial, spec: ModelSpec, effect: str | None) -> ModelSpec:
           f"{shot.ground_damping_n_s_m:.0f} N s/m (toe fit: k {k0:.3g} n {n0:.2f} damping {d0:.0f}); in-sample gap "
           f"{start:.5f} -> {res.fun:.5f} in {res.nfev} evaluations", flush=True)
     return replace(spec, compliance=shot.compliance, ground_damping_n_s_m=shot.ground_damping_n_s_m)
+
+
+def surface_folds(rec, trial, spec: ModelSpec, scales: np.ndarray, folds: int) -> None:
+    """The push-off against the surface model, each with its surface shot on a fold's training stances (step 6)."""
+    gaps = {None: {}, "active_push_off": {}}
+    for train_idx, test_idx in sg.fold_indices([s.index for s in trial.stances], folds):
+        train = [s for s in trial.stances if s.index in train_idx]
+        for effect in gaps:
+            shot = shoot_surface(rec, trial, spec, effect, train)
+            fs._CONTEXT.update(rec=rec, trial=trial, scales=scales)  # the evaluator cleared it
+            fitted, coefs = identify(shot, trial, train, effect)
+            for s in trial.stances:
+                if s.index in test_idx:
+                    gaps[effect][s.index] = fs.simulate_held_out(fitted, coefs, trial, s, scales)["gap"]
+    order = [s.index for s in trial.stances]
+    cur, cand = (np.array([gaps[e][i] for i in order]) for e in (None, "active_push_off"))
+    d, shrink, p = fs.compare_gaps(cur, cand)
+    print(f"  surface shot on {folds} folds' training stances: held-out gap {cur.mean():.5f} -> {cand.mean():.5f}, "
+          f"push-off shrink {shrink:+.3f}, p {p:.3g} (threshold {fs.ALPHA / N_CANDIDATES:.4f}), per-stance log ratios "
+          f"{np.round(d, 3).tolist()}", flush=True)
 
 
 def gate_figures(rec, trial, spec: ModelSpec) -> None:
@@ -164,6 +191,7 @@ def main() -> None:
     ap.add_argument("--gate", action="store_true", help="also the held-out stiffness gate on both models")
     ap.add_argument("--truth-surface", action="store_true", help="also leave-one-out with the truth's surface law")
     ap.add_argument("--shoot-surface", action="store_true", help="also leave-one-out with each model's shot surface")
+    ap.add_argument("--surface-folds", type=int, default=0, help="with --shoot-surface: shot on K folds, held out")
     args = ap.parse_args()
     for path in map(Path, args.files):
         rec = load_recording(path)
@@ -191,7 +219,9 @@ def main() -> None:
                                 ground_damping_n_s_m=ground.damping_n_s_m)
             compare("truth's surface law", held_out(trial, true_spec, None, scales),
                     held_out(trial, true_spec, "active_push_off", scales))
-        if args.shoot_surface:
+        if args.shoot_surface and args.surface_folds:
+            surface_folds(rec, trial, spec, scales, args.surface_folds)
+        elif args.shoot_surface:
             shot = shoot_surface(rec, trial, spec, None), shoot_surface(rec, trial, spec, "active_push_off")
             fs._CONTEXT.update(rec=rec, trial=trial, scales=scales)  # the evaluator cleared it
             compare("shot surface", held_out(trial, shot[0], None, scales), held_out(trial, shot[1], "active_push_off",
