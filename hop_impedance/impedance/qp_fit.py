@@ -30,7 +30,23 @@ optimum itself: a convex QP whose unconstrained minimiser satisfies every
 constraint has that minimiser as its optimum (KKT with all multipliers 0), so
 it is returned without calling OSQP (``rounds = 0``, ``working_rows = 0``,
 ``iterations = 0``). OSQP solves every QP with a non-empty working set (it is
-the solver of record for every fit where a constraint binds). If W would exceed ``max_working_rows``, the loop exceeds
+the solver of record for every fit where a constraint binds).
+
+Degenerate working sets: a round's solve counts when OSQP's polishing succeeds and
+every multiplier has the sign of an active bound (exact), and also when polishing
+fails but ADMM converged at every stage down to ``eps`` (:data:`UNPOLISHED`): the
+iterate is then the working-set QP's optimum to ``eps``, which is all the loop
+needs, and step 3 still checks every row. Polishing fails where the optimum has
+many nearly dependent active rows: on recordings/sim_2p20hz_hard's 5 ms live
+window, stance 2's knee (damping terms at 0) has 528 of its 1051 rows active.
+Before session 14 such a round sent the fit to the all-rows solve, which took
+40,575 iterations (0.4 s, the live short-window p99) and ended 2.8e-7
+infeasible with a KKT residual of 2.9e-4; kept on the working set it is
+feasible to 1.3e-9 with a residual of 7e-11 (test_qp_fit.py,
+``bench/qp_fallback.py``). A polished iterate with a wrong-sign multiplier
+still goes to the all-rows solve (its active set was guessed wrong).
+
+If W would exceed ``max_working_rows``, the loop exceeds
 ``max_rounds``, or a working-set solve does not converge, the full row set is
 solved as before (:meth:`ConstrainedLeastSquares.solve_all_rows`), so a stance is rejected
 only when OSQP fails on the full problem. Only OSQP status ``solved`` counts as
@@ -53,6 +69,9 @@ from scipy import sparse
 #: OSQP's algebra backend. Named explicitly: without it every ``osqp.OSQP()``
 #: tries to import the CUDA and MKL backends first (~1-2 ms per workspace).
 OSQP_ALGEBRA = "builtin"
+#: A working-set round whose ADMM iterate converged at every stage but whose polishing failed: kept
+#: (module docstring, "Degenerate working sets").
+UNPOLISHED = "solved, not polished"
 #: OSQP's representation of an infinite bound.
 OSQP_INFINITY = 1e30
 
@@ -390,7 +409,7 @@ class ConstrainedLeastSquares:
             status, x_new, duals, iters, polished = self._solve_rows(solver, P_upper, q, A[work], x, duals)
             iterations += iters
             rounds += 1
-            if status != "solved" or not np.isfinite(x_new).all():
+            if status not in ("solved", UNPOLISHED) or not np.isfinite(x_new).all():
                 break
             x = x_new
         return self.solve_all_rows(design, target, constraints)
@@ -468,8 +487,8 @@ class ConstrainedLeastSquares:
             exact=lambda polished_result: self._right_signs(np.asarray(polished_result.y, float)[:k]),
         )
         status = str(result.info.status)
-        if not exact and status == "solved":  # not exact: the caller solves the full row set instead
-            status = "solved, not polished" if not polished else "solved with wrong-sign multipliers"
+        if not exact and status == "solved":  # wrong signs: the caller solves the full row set instead
+            status = UNPOLISHED if not polished else "solved with wrong-sign multipliers"
         return status, np.asarray(result.x, float), np.asarray(result.y, float)[:k], iterations, polished
 
     def solve_all_rows(self, design: np.ndarray, target: np.ndarray, constraints: np.ndarray) -> QpSolution:

@@ -228,3 +228,46 @@ def test_full_row_fallback_prints_nothing_and_is_optimal(capfd, freq, seed, join
     A, _ = constraint_rows(regs, parameter_indices(terms))
     reference = fit_by_slsqp(X, st.moment_nm, A)
     assert fit.sse_variable <= float(np.sum((st.moment_nm - X @ reference) ** 2)) * (1 + 1e-6)
+
+
+def test_a_degenerate_working_set_is_solved_there_not_on_all_rows(monkeypatch):
+    """Session 14: on recordings/sim_2p20hz_hard with the live stage's 5 ms window, stance 2's knee has a QP whose
+    optimum has ~half of its 1051 rows active (the damping terms at 0); OSQP's polishing fails on the working set,
+    and the all-rows fallback took 40,575 iterations (0.4 s, the short-window modes' p99) and ended 2.8e-7
+    infeasible with a KKT residual of 2.9e-4 (`bench/qp_fallback.py`). Now the working set's converged ADMM
+    iterate is kept (``qp_fit.UNPOLISHED``): every fit of that stance stays on the working set and passes the
+    independent certificate of test_working_set_solution_satisfies_kkt_on_every_row."""
+    import dataclasses
+    from pathlib import Path
+
+    from scipy.optimize import nnls
+
+    from hop_impedance.biomech.analysis import AnalysisOptions, analyze_recording
+    from hop_impedance.impedance.recording_fits import fit_stance_joints
+    from hop_impedance.io.recording_io import load_recording
+
+    path = Path(__file__).resolve().parents[2] / "recordings" / "sim_2p20hz_hard.mcap"
+    analysis = analyze_recording(load_recording(path), dataclasses.replace(AnalysisOptions(), post_takeoff_s=0.005))
+    solved = []
+    solve = ConstrainedLeastSquares.solve
+
+    def recorded(self, design, target, constraints):
+        out = solve(self, design, target, constraints)
+        solved.append((design, target, constraints, out))
+        return out
+
+    monkeypatch.setattr(ConstrainedLeastSquares, "solve", recorded)  # the real solver, its calls recorded
+    fit_stance_joints(analysis.stances[2], None, {}, joints=("knee",))
+    degenerate = 0
+    for X, tau, A, sol in solved:
+        assert sol.converged and sol.working_rows != -1, sol.status  # never the all-rows fallback
+        Xs, ys, rows, scale = scaled_problem(X, tau, A)
+        x = sol.coefficients * scale
+        slack = rows @ x
+        assert slack.min() >= -1e-8
+        active = np.flatnonzero(slack < 1e-7)
+        if active.size:
+            _, residual = nnls(rows[active].T, Xs.T @ (Xs @ x - ys))
+            assert residual <= 1e-8 * np.linalg.norm(Xs.T @ ys)
+        degenerate += active.size > A.shape[0] // 4
+    assert degenerate >= 1  # the case is still in the recording (528 of 1051 rows active, measured)
