@@ -191,7 +191,9 @@ def simulate_held_out(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, 
     except RuntimeError as exc:
         return {"gap": np.inf, "rms": np.full(7, np.nan), "duration_error_s": np.nan, "net_work_j": np.nan,
                 "end_reason": f"failed: {exc}", "samples": None, "terms": None}
-    return _gap_of(sim, s, spec.offset_n, scales, take_off_level_n(trial), samples)
+    # the detector's level is read only by the two-sided term: not worked out for every simulated stance otherwise
+    level = take_off_level_n(trial) if TWO_SIDED_DURATION else np.nan
+    return _gap_of(sim, s, spec.offset_n, scales, level, samples)
 
 
 def simulate_for_gap(chain, law, ground, s: MeasuredStance):

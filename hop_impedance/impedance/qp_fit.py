@@ -487,7 +487,7 @@ class ConstrainedLeastSquares:
             exact=lambda polished_result: self._right_signs(np.asarray(polished_result.y, float)[:k]),
         )
         status = str(result.info.status)
-        if not exact and status == "solved":  # wrong signs: the caller solves the full row set instead
+        if not exact and status == "solved":  # the caller keeps UNPOLISHED; wrong signs send it to the full row set
             status = UNPOLISHED if not polished else "solved with wrong-sign multipliers"
         return status, np.asarray(result.x, float), np.asarray(result.y, float)[:k], iterations, polished
 
