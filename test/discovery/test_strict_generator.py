@@ -93,3 +93,23 @@ def test_one_joint_law_per_recording_unless_a_spread_is_asked_for():
     _, spread = strict_recording(StrictConfig(hops=3, seed=5, stiffness_spread=0.2))
     k0s = np.array([h["k0"] for h in spread["per_hop"]])
     assert 0.0 < np.ptp(k0s / k0s.mean(axis=0), axis=0).max() < 0.8
+
+
+def test_angle_dependent_stiffness_stays_a_stiffness_over_every_stance():
+    """Seed 000's Eq. 7 (K >= 0) holds in the angle-dependent case: with ``k1 = k0`` per rad about mid-stance the
+    stiffness at touchdown, ``k0 - k1 R``, is positive in every hop (the ankle's falls to 3-7 % of mid-stance's in
+    seeds 0-3); with ``k1 = 1.5 k0`` it would be negative at the ankle (R 0.8-0.9 rad), and the generator refuses
+    to draw such a stance instead of writing it (before: it wrote K down to -0.47 k0 at touchdown)."""
+    _, truth = strict_recording(StrictConfig(hops=3, seed=1, angle_k1=1.0))
+    k_td = np.array([np.array(h["k0"]) - np.array(h["k1"]) * np.array(h["flex_mid_rad"]) for h in truth["per_hop"]])
+    k1 = np.array([h["k1"] for h in truth["per_hop"]])
+    assert np.all(k1 > 0.0)
+    assert np.all(k_td > 0.0)
+    # the hit-rate bench's size (bench/discovery_hit_rates.py STRICT_CASES): the ankle's K at touchdown is about a
+    # third of its K at mid-stance, as in seed 000's Table 2 at 2.2 Hz (301 / (301 + 948 x 0.59) = 0.35)
+    _, truth = strict_recording(StrictConfig(hops=4, seed=0, angle_k1=0.8))
+    ratio = np.array([1.0 - 0.8 * np.array(h["flex_mid_rad"]) for h in truth["per_hop"]])
+    assert 0.25 < np.median(ratio[:, 0]) < 0.45
+    assert np.all(ratio > 0.0)
+    with pytest.raises(ValueError, match="no plausible stance"):
+        strict_recording(StrictConfig(hops=1, seed=1, angle_k1=1.5))

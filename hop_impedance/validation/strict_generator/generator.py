@@ -10,7 +10,8 @@ relative angles ``r1 = th_shank - a``, ``r2 = th_thigh - th_shank``, ``r3 = th_h
 Joint law (extensor moment, conservative): ``M_j = M_mid_j + k0_j dphi + k1_j dphi^2 / 2`` with
 ``dphi = phi_j - phi_mid_j``, acting on ``r_j`` as the generalised force ``-s_j M_j``; ground
 ``Fz = K_GROUND |z_toe|^1.5`` for ``z_toe < 0`` (no damper). With ``k1 = 0`` this is the strict
-baseline ``M = M_td + K phi`` of the outside generator; ``k1 > 0`` is an angle-dependent stiffness.
+baseline ``M = M_td + K phi`` of the outside generator; ``k1 > 0`` is an angle-dependent stiffness
+(stiffness ``k0 + k1 dphi`` kept >= 0 over the stance, seed 000's Eq. 7: a draw that breaks it is re-drawn).
 
 Equations of motion: segment centre-of-mass positions and angles are written in ``q`` with sympy; the
 mass matrix is ``sum m J^T J + I j^T j`` and the velocity term ``sum m J^T (dJ/dt qd) + ...`` (Kane's
@@ -72,6 +73,10 @@ class StrictConfig:
     seed : int
     angle_k1 : float
         Angle-dependent stiffness ``k1 = angle_k1 * k0`` (1/rad) on every joint (0 = strict baseline).
+        ``k1`` is referenced to mid-stance (maximal flexion), so the stiffness falls towards touchdown and
+        take-off, ``K = k0 (1 - angle_k1 R)`` at an extension ``R`` from mid-stance; a draw in which ``K``
+        turns negative anywhere in the stance (against seed 000's Eq. 7) is re-drawn, so ``angle_k1`` must
+        stay below ``1 / R`` of the joint that moves most (the ankle, R 0.8-0.9 rad here).
     force_offset_n : float
         Constant added to the plate Fz (N).
     marker_latency_s : float
@@ -272,6 +277,11 @@ def _mid_posture(body: Body, rng: np.random.Generator, cfg: StrictConfig, k0_rec
     return q, sol[2:], k0, k1
 
 
+def stiffness_along(k0: np.ndarray, k1: np.ndarray, r: np.ndarray, r_mid: np.ndarray) -> np.ndarray:
+    """Joint stiffness ``dM/dphi = k0 + k1 dphi`` (N m/rad), shape (3, n), at relative angles ``r`` (3, n)."""
+    return k0[:, None] + k1[:, None] * (FLEX_SIGN[:, None] * (np.asarray(r) - np.asarray(r_mid)[:, None]))
+
+
 def _stance(body: Body, rng: np.random.Generator, cfg: StrictConfig, k0_rec: np.ndarray, tries: int = 20) -> dict:
     """One time-symmetric stance (mirrored around mid-stance); re-drawn until it is a plausible hop."""
     for _ in range(tries):
@@ -289,6 +299,8 @@ def _stance(body: Body, rng: np.random.Generator, cfg: StrictConfig, k0_rec: np.
         y_to = sol.y_events[0][0]
         v_com = model.com_z_rate(y_to[:5], y_to[5:])
         if not (0.1 < half < 0.25 and v_com > 0.5 and abs(y_to[1] - q_mid[1]) < 0.6):
+            continue
+        if np.min(stiffness_along(k0, k1, sol.y[2:5], q_mid[2:])) < 0.0:  # seed Eq. 7: K >= 0 in stance
             continue
         return {"model": model, "dense": sol.sol, "half_s": half, "y_takeoff": y_to, "v_com": v_com,
                 "k0": k0, "k1": k1, "m_mid": m_mid, "q_mid": q_mid}
