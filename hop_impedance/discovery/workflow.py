@@ -299,7 +299,7 @@ def _scored_round(ev: fs.HeldOutEvaluator, spec: ModelSpec, trial: MeasuredTrial
     timing["rounds"].append(time.perf_counter() - t0)
     for r in runs:
         timing["per_candidate_s"].setdefault(r.effect, []).append(r.seconds)
-    return fs.score(trial, current, runs)
+    return fs.defer_energy_effects(fs.score(trial, current, runs), stiffness_gate.screen_factor(len(cands)))
 
 
 def _round_json(scores: list[fs.ForwardScore], n_candidates: int, scales: np.ndarray, gates: dict) -> dict:
