@@ -247,10 +247,11 @@ def law_scale_at(law_scale: dict | None, freq_hz: float) -> tuple[np.ndarray, np
 
 def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_duration_s: float,
               hip_trunk_spring_nm_rad: float = 0.0, bell: BellActivation | None = None,
-              law_scale: dict | None = None) -> ImpedanceLaw:
+              law_scale: dict | None = None, push_weights=PUSH_OFF_WEIGHTS) -> ImpedanceLaw:
     """The joint law for a frequency with the chosen effects (``hip_trunk_spring_nm_rad`` is added to the
     hip's k0: :data:`HIP_TRUNK_SPRING_NM_RAD`; ``bell`` scales the elastic moment, instead of
-    :data:`ACTIVATION`, which it excludes; ``law_scale`` multiplies Table 2's k0 and k1, :func:`law_scale_at`)."""
+    :data:`ACTIVATION`, which it excludes; ``law_scale`` multiplies Table 2's k0 and k1, :func:`law_scale_at`;
+    ``push_weights`` shares the push-off between ankle, knee and hip, :data:`PUSH_OFF_WEIGHTS`)."""
     if bell is not None and effects.time_activation:
         raise ValueError("one activation per law: the bell excludes Effects.time_activation")
     k0, k1 = seed_stiffness(freq_hz)
@@ -268,7 +269,7 @@ def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_durati
     )
     if not effects.push_off:
         return CompositeLaw((eq3,))
-    push = PushOff(PUSH_OFF_BASE_NM * np.array(PUSH_OFF_WEIGHTS), push_onset_s, push_duration_s)
+    push = PushOff(PUSH_OFF_BASE_NM * np.asarray(push_weights, float), push_onset_s, push_duration_s)
     return CompositeLaw((eq3, push))
 
 
@@ -299,7 +300,7 @@ def hopping_config(
     push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     hip_trunk_spring_nm_rad: float = 0.0,
     bell_activation_min: float | None = None, law_scale: dict | None = None,
-    pad: GroundLaw | None = None,
+    pad: GroundLaw | None = None, push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
@@ -316,7 +317,8 @@ def hopping_config(
     (:data:`SEED_LIKE_BELL_MIN`; None: none): a :class:`BellActivation` from it over the passive stance; ``law_scale``
     (:data:`SEED_LIKE_LAW_SCALE`; None: Table 2): factors on Table 2's k0, k1 (:func:`law_scale_at`), in the truth.
     ``pad`` (e.g. :data:`SHOE_PAD`; None: none): an elastic pad in series with every surface of the trial
-    (:class:`~hop_impedance.simulation.ground.PaddedGround`), stated in the truth file's surface.
+    (:class:`~hop_impedance.simulation.ground.PaddedGround`), stated in the truth file's surface. ``push_weights``:
+    the push-off's amplitude per joint in units of :data:`PUSH_OFF_BASE_NM` (default :data:`PUSH_OFF_WEIGHTS`).
     """
     chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
     expected = with_pad(surface(calibration_surface or surface_name), pad)
@@ -325,7 +327,7 @@ def hopping_config(
     ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
     bell = None if bell_activation_min is None else BellActivation(bell_activation_min, ts)
     law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts, hip_trunk_spring_nm_rad, bell,
-                    law_scale)
+                    law_scale, push_weights)
     config = HoppingConfig(
         freq_hz=freq_hz, n_hops=n_hops, surface=expected, law=law,
         touchdown_rho_rad=joint_triple(touchdown_rho_rad),
