@@ -27,7 +27,7 @@ Usage: .venv/bin/python bench/simulator_energy_budget.py [--hops 5] [--freqs 1.5
                    [--posture-sd RAD --seeds 1,2,3]]
        .venv/bin/python bench/simulator_energy_budget.py --lossless --hopper seed-like [--hops 30] [--no-feedback]
                    [--perturb FRACTION]
-       .venv/bin/python bench/simulator_energy_budget.py --find-orbits [--write]
+       .venv/bin/python bench/simulator_energy_budget.py --find-orbits [--to HZ] [--write]
 (``--write`` also writes docs/simulator_energy.md; ``--trunk K`` adds a trunk-balance moment of
 stiffness K N m/rad; ``--lossless`` runs issue 17's passive test instead: no damping, no push-off,
 lossless surface, per hop stance time, COM apex and energy by component, hop N against hop 3;
@@ -230,8 +230,11 @@ def periodic_line(chain, config, cal, guess=None):
             f"largest {values[k].real:+.3f}{values[k].imag:+.3f}j along [{mode_text}] (real part)")
 
 
-#: ``--find-orbits``: the law frequencies the continuation steps through from 2.2 Hz (Hz).
-ORBIT_PATH = (2.2, 2.1, 2.0, 1.93, 1.87, 1.8, 1.73, 1.66, 1.6, 1.53)
+#: ``--find-orbits``: the law frequencies the continuation steps through from 2.2 Hz (Hz): 0.01 Hz steps below 1.95 Hz,
+#: where larger steps leave the attracting hop's reach.
+ORBIT_PATH = (2.2, 2.1, 2.0, 1.975, 1.95) + tuple(round(1.94 - 0.01 * k, 2) for k in range(42))
+#: Hops the closed loop runs at each next law frequency before its last touchdown starts the Newton steps.
+SETTLE_HOPS = 15
 
 
 def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False) -> dict:
@@ -241,13 +244,15 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False) -> d
     At 2.2 Hz: the calibrated hop, the periodic hop nearest it with the energy-keeping flight's own rule (reversed
     take-off rates), then the periodic hop landing along its touchdown rates (periodic_hop.periodic_hop) and the
     feedback that makes it attract (periodic_hop.landing_feedback). Each next law frequency starts from the previous
-    periodic hop with the previous feedback in the loop (which keeps the Newton steps well conditioned where the
-    hop without it is unstable); the hop found there is re-stated with its own landing rates and placement and gets
-    its own feedback. ``at_seed_frequency``: each periodic hop is the one whose period is 1 / its law's frequency
-    (chosen along the family of periodic hops of other energies; found at 2.2 and 2.1 Hz, not below 2.0 Hz); else
-    (default) the one nearest the previous. Stops at the first law frequency where none is found.
+    periodic hop with the previous feedback in the loop: :data:`SETTLE_HOPS` hops of the trial (the closed loop
+    attracts where the hop without it is unstable, and where Newton steps from the previous hop stall), whose last
+    touchdown, re-stated with its own landing rates and placement, starts the Newton steps of the periodic hop; that
+    hop gets its own feedback. ``at_seed_frequency``: instead each periodic hop is the one whose period is 1 / its
+    law's frequency (Newton steps on the closed loop with that condition, chosen along the family of periodic hops of
+    other energies; found at 2.2 and 2.1 Hz, not at 2.0 Hz). Stops at the first law frequency where none is found.
     Returns {frequency: dict of the hop (scenarios.SEED_LIKE_LOSSLESS_HOPS' entries) and its eigenvalues}.
     """
+    from hop_impedance.simulation.hopping_trial import touchdown_state_vector
     from hop_impedance.simulation.periodic_hop import landing_feedback, periodic_hop, touchdown_vector
     from hop_impedance.simulation.scenarios import lossless_hopper_config, seed_like_hopper_options
 
@@ -260,20 +265,32 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False) -> d
     feedback = None
     out = {}
     for freq in path:
-        chain, config = lossless_hopper_config(freq, 30, seed_like_hopper_options())
+        chain, config = lossless_hopper_config(freq, SETTLE_HOPS, seed_like_hopper_options())
         landing = hop.state[3:] if feedback is None else feedback.landing_ref
         config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in landing),
                                      landing_feedback=feedback)
-        looped = periodic_hop(chain, config, cal, hop.state, period_s=1.0 / freq if at_seed_frequency else None)
-        landing_new, ahead = (looped.state[3:], cal.com_ahead_m) if feedback is None else feedback.choose(looped.state)
+        settled = False
+        if feedback is not None and not at_seed_frequency:
+            trial = simulate_hopping(chain, dataclasses.replace(config, com_ahead_m=cal.com_ahead_m,
+                                                                first_touchdown=tuple(float(v) for v in hop.state)))
+            settled = not trial.stop_reason
+            start = touchdown_state_vector(chain, trial.stances[-1].touchdown)
+        if not settled:  # the first law, a periodic hop of period 1/f, or a settling trial that stopped: Newton steps
+            looped = periodic_hop(chain, config, cal, hop.state, period_s=1.0 / freq if at_seed_frequency else None)
+            start, settled = looped.state, looped.success
+        landing_new, ahead = (start[3:], cal.com_ahead_m) if feedback is None else feedback.choose(start)
         config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in landing_new),
                                      landing_feedback=None)
         cal = dataclasses.replace(cal, com_ahead_m=float(ahead))
-        hop = periodic_hop(chain, config, cal, looped.state, max_iterations=6)
+        try:
+            hop = periodic_hop(chain, config, cal, start, max_iterations=6)
+        except ValueError as exc:
+            print(f"  {freq:g} Hz: no periodic hop ({exc})", flush=True)
+            break
         feedback, closed = landing_feedback(chain, config, cal, hop.state)
         out[freq] = {"state": [float(v) for v in hop.state], "landing_rates_rad_s": list(feedback.landing_ref),
                      "com_ahead_m": feedback.com_ahead_ref_m, "gain": [list(row) for row in feedback.gain],
-                     "stance_s": hop.stance_s, "flight_s": hop.flight_s, "found": bool(looped.success and hop.success),
+                     "stance_s": hop.stance_s, "flight_s": hop.flight_s, "found": bool(settled and hop.success),
                      "residual": float(np.abs(hop.residual).max()),
                      "open_loop_moduli": [float(abs(v)) for v in hop.eigenvalues],
                      "closed_loop_moduli": [float(abs(v)) for v in closed]}
@@ -365,9 +382,12 @@ def main() -> None:
                              "scenarios.SEED_LIKE_LOSSLESS_HOPS_FILE")
     parser.add_argument("--at-seed-frequency", action="store_true",
                         help="with --find-orbits: the periodic hops of period 1 / the law's frequency (printed only)")
+    parser.add_argument("--to", type=float, default=ORBIT_PATH[-1], metavar="HZ",
+                        help="with --find-orbits: stop the continuation at this law frequency (one of ORBIT_PATH)")
     args = parser.parse_args()
     if args.find_orbits:
-        found = find_seed_like_orbits(at_seed_frequency=args.at_seed_frequency)
+        path = ORBIT_PATH[:ORBIT_PATH.index(args.to) + 1]
+        found = find_seed_like_orbits(path, at_seed_frequency=args.at_seed_frequency)
         write_orbits(found, args.write and not args.at_seed_frequency)
         return
     if args.lossless and args.hopper:

@@ -743,6 +743,13 @@ def given_start_calibration(config: HoppingConfig) -> HopCalibration:
                           d_vx_d_com_ahead_s=np.nan, touchdown_rates_rad_s=np.array([r1, r2, r3, r4]))
 
 
+def touchdown_state_vector(chain: Chain, td: TouchdownState) -> np.ndarray:
+    """The hop map's state of a touchdown (periodic_hop.STATE_NAMES): touchdown speed (m/s, down), COM vx (m/s), COM
+    ahead of the toe (m), segment rates q1..q4 (rad/s)."""
+    v = com_velocity(chain, td.g, td.gd)
+    return np.r_[-v[1], v[0], body_com(chain, td.g)[0] - td.g[0], td.gd[2:]]
+
+
 def landing_for_hop(chain: Chain, config: HoppingConfig, cal: HopCalibration,
                     td: TouchdownState) -> tuple[HoppingConfig, HopCalibration]:
     """The configuration and calibration the flight after the hop that touched down in ``td`` uses: with
@@ -751,9 +758,7 @@ def landing_for_hop(chain: Chain, config: HoppingConfig, cal: HopCalibration,
     feedback = config.landing_feedback
     if feedback is None:
         return config, cal
-    v = com_velocity(chain, td.g, td.gd)
-    x = np.r_[-v[1], v[0], body_com(chain, td.g)[0] - td.g[0], td.gd[2:]]
-    landing, ahead = feedback.choose(x)
+    landing, ahead = feedback.choose(touchdown_state_vector(chain, td))
     return (replace(config, landing_rates_rad_s=tuple(float(r) for r in landing)),
             replace(cal, com_ahead_m=float(ahead)))
 

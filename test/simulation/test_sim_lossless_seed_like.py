@@ -29,7 +29,7 @@ from hop_impedance.simulation.scenarios import (
 from hop_impedance.simulation.stance import stance_energy_j
 
 #: Issue 17 asks for all three seed frequencies' laws; a periodic hop of the counterpart is stored (found) only at
-#: 2.2 Hz's (docs/simulator.md, session 15: the continuation from 2.2 Hz stops at 1.93 Hz, and at 1.87 and 1.53 Hz no
+#: 2.2 Hz's (docs/simulator.md, session 15: the continuation from 2.2 Hz reaches 1.93 Hz, and at 1.87 and 1.53 Hz no
 #: other start found one), so the other two fail (strict: they must be removed from the xfail list once found).
 NOT_FOUND = pytest.mark.xfail(raises=ValueError, strict=True,
                               reason="no periodic hop of the lossless counterpart found at this law (session 15)")
