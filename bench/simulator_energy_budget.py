@@ -25,11 +25,16 @@ Usage: .venv/bin/python bench/simulator_energy_budget.py [--hops 5] [--freqs 1.5
        [--flights prescribed,energy_keeping] [--trunk K] [--write]
        [--lossless [--seed-like [--balance active|fixed|hip_spring]] [--periodic] [--landing]
                    [--posture-sd RAD --seeds 1,2,3]]
+       .venv/bin/python bench/simulator_energy_budget.py --lossless --hopper seed-like [--hops 30] [--no-feedback]
+                   [--perturb FRACTION]
+       .venv/bin/python bench/simulator_energy_budget.py --find-orbits [--to HZ] [--write]
 (``--write`` also writes docs/simulator_energy.md; ``--trunk K`` adds a trunk-balance moment of
 stiffness K N m/rad; ``--lossless`` runs issue 17's passive test instead: no damping, no push-off,
 lossless surface, per hop stance time, COM apex and energy by component, hop N against hop 3;
 ``--balance`` chooses how the trunk is held, ``--periodic`` adds the periodic hop and its eigenvalues,
-``--landing`` starts on it and lands along its touchdown rates, ``--posture-sd`` adds touchdown noise.)
+``--landing`` starts on it and lands along its touchdown rates, ``--posture-sd`` adds touchdown noise;
+``--hopper seed-like`` runs the seed-like hopper's lossless counterpart from its stored periodic hops with the
+landing feedback (issue 17, session 15), ``--find-orbits`` finds them again.)
 """
 
 from __future__ import annotations
@@ -74,7 +79,8 @@ BALANCES = ("active", "fixed", "hip_spring")
 
 def lossless_config(freq_hz: float, hops: int, trunk: float, flight: str, seed_like: bool = False,
                     balance: str = "active", posture_sd_rad: float = 0.0):
-    """(chain, config) of issue 17's passive test: no damping, no push-off, lossless hard surface, no sliding.
+    """(chain, config) of issue 17's passive test: no damping, no push-off, lossless hard surface, no sliding
+    (scenarios.lossless_hopper_config on the hard surface).
 
     ``seed_like``: scenarios.seed_like_options (toe-tip contact, its posture) with the trunk held by
     ``balance``: ``active`` scenarios.TRUNK_BALANCE (a moment on the trunk's pitch about its touchdown
@@ -82,19 +88,13 @@ def lossless_config(freq_hz: float, hops: int, trunk: float, flight: str, seed_l
     foot placement), ``hip_spring`` a hip spring of scenarios.HIP_TRUNK_SPRING_NM_RAD (conservative).
     ``posture_sd_rad``: seeded hop-to-hop noise of the touchdown joint angles (HoppingConfig.posture_sd_rad).
     """
-    from hop_impedance.simulation.ground import HARD, lossless
     from hop_impedance.simulation.hopping_trial import touchdown_posture
-    from hop_impedance.simulation.scenarios import HIP_TRUNK_SPRING_NM_RAD, Effects, seed_like_options
+    from hop_impedance.simulation.scenarios import lossless_hopper_config, seed_like_options
 
-    options = {"trunk_balance": TrunkBalance(trunk) if trunk else None}
-    if seed_like:
-        options = {k: v for k, v in seed_like_options().items() if k not in ("push_timing", "bell_activation_min")}
-        if balance == "hip_spring":
-            options = {**options, "trunk_balance": None, "hip_trunk_spring_nm_rad": HIP_TRUNK_SPRING_NM_RAD}
-    chain, config = hopping_config(freq_hz, "hard", hops, Effects(damping=False, push_off=False), variability=False,
-                                   flight=flight, **options)
-    config = dataclasses.replace(config, surface=lossless(HARD), friction_coefficient=None,
-                                 posture_sd_rad=posture_sd_rad)
+    options = seed_like_options() if seed_like else {"trunk_balance": TrunkBalance(trunk) if trunk else None}
+    chain, config = lossless_hopper_config(freq_hz, hops, options, "hard",
+                                           "hip_spring" if seed_like and balance == "hip_spring" else "balance")
+    config = dataclasses.replace(config, flight=flight, posture_sd_rad=posture_sd_rad)
     if seed_like and balance == "fixed":
         q4 = float(touchdown_posture(chain, np.asarray(config.touchdown_rho_rad), config.com_ahead_m)[3])
         config = dataclasses.replace(config, trunk_balance=dataclasses.replace(config.trunk_balance, reference_rad=q4))
@@ -140,8 +140,6 @@ def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str, seed_lik
     ``landing``: first find that periodic hop, then start the trial on it (HoppingConfig.first_touchdown)
     and land every hop along its touchdown rates (HoppingConfig.landing_rates_rad_s); that orbit's
     eigenvalues are reported too."""
-    from hop_impedance.simulation.dynamics import body_com, com_velocity
-
     chain, config = lossless_config(freq_hz, hops, trunk, flight, seed_like, balance, posture_sd_rad)
     setup = f"seed-like options, {balance} trunk balance" if seed_like else f"trunk {trunk:g} N m/rad"
     if posture_sd_rad:
@@ -151,15 +149,26 @@ def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str, seed_lik
         cal = _calibration(chain, config)
         ph, text = periodic_line(chain, config, cal)
         config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(r) for r in ph.state[3:]),
-                                     first_touchdown=tuple(float(v) for v in ph.state))
+                                     first_touchdown=tuple(float(v) for v in ph.state), com_ahead_m=cal.com_ahead_m)
         head = [text, "  landing along its touchdown rates: " + periodic_line(chain, config, cal, ph.state)[1].strip()]
         setup += ", starting on the periodic hop and landing along its touchdown rates"
+    text = trial_lines(chain, config, f"{flight}, {freq_hz} Hz, {setup}", seed)
+    if periodic and not landing:
+        text += "\n" + periodic_line(chain, config, None)[1]
+    return "\n".join([text] + head)
+
+
+def trial_lines(chain, config, title: str, seed: int = 1) -> str:
+    """One lossless trial hop by hop (:func:`lossless_hops`' lines): stance, COM apex, energy by component, hop N
+    against hop 3, the trunk's pitch and the hip's range, and the energy at touchdown against hop 1's."""
+    from hop_impedance.simulation.dynamics import body_com, com_velocity
+
     try:
         trial = simulate_hopping(chain, config, seed=seed)
     except ValueError as exc:
-        return f"{flight}, {freq_hz} Hz, {setup}: no trial ({exc})"
+        return f"{title}: no trial ({exc})"
     rows, parts = [], []
-    lines = [f"{flight}, {freq_hz} Hz, {setup}: {len(trial.stances)} hops"
+    lines = [f"{title}: {len(trial.stances)} hops"
              + (f" (stopped: {trial.stop_reason})" if trial.stop_reason else ""),
              "  energy (J): E at touchdown; COM (translation + gravity) and segment rotation about the COM at "
              "touchdown -> take-off; joint springs at take-off; trunk-balance work, spring / damper term; ground"]
@@ -184,12 +193,13 @@ def lossless_hops(freq_hz: float, hops: int, trunk: float, flight: str, seed_lik
     trunk_j = sum(e["trunk_spring_j"] + e["trunk_damper_j"] for e in parts[:-1])
     e0 = parts[0]["e_touchdown_j"]
     drift = max(abs(e["e_touchdown_j"] - e0) for e in parts) / e0
+    take_off = [e["com_to_j"] + e["segments_to_j"] + e["springs_to_j"] for e in parts]
+    flight = max((abs(nxt["e_touchdown_j"] - to) / to for nxt, to in zip(parts[1:], take_off)), default=np.nan)
     lines.append(f"  E at touchdown, hop {len(parts)} - hop 1: {parts[-1]['e_touchdown_j'] - e0:+.3f} J "
-                 f"(largest relative difference from hop 1: {drift:.1e}); "
+                 f"(largest relative difference from hop 1: {drift:.1e}; E at touchdown against the previous take-off's "
+                 f"COM + segments + springs: {flight:.1e}); "
                  f"trunk-balance work over hops 1-{len(parts) - 1}: {trunk_j:+.3f} J")
-    if periodic and not landing:
-        lines.append(periodic_line(chain, config, trial.calibration)[1])
-    return "\n".join(lines + head)
+    return "\n".join(lines)
 
 
 def _calibration(chain, config):
@@ -220,6 +230,125 @@ def periodic_line(chain, config, cal, guess=None):
             f"largest {values[k].real:+.3f}{values[k].imag:+.3f}j along [{mode_text}] (real part)")
 
 
+#: ``--find-orbits``: the law frequencies the continuation steps through from 2.2 Hz (Hz): 0.01 Hz steps below 1.95 Hz,
+#: where larger steps leave the attracting hop's reach.
+ORBIT_PATH = (2.2, 2.1, 2.0, 1.975, 1.95) + tuple(round(1.94 - 0.01 * k, 2) for k in range(42))
+#: Hops the closed loop runs at each next law frequency before its last touchdown starts the Newton steps.
+SETTLE_HOPS = 15
+
+
+def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False) -> dict:
+    """The periodic hops of the seed-like hopper's lossless counterpart and their landing feedback, by continuation in
+    the law's frequency (scenarios.lossless_hopper_config of scenarios.seed_like_hopper_options()).
+
+    At 2.2 Hz: the calibrated hop, the periodic hop nearest it with the energy-keeping flight's own rule (reversed
+    take-off rates), then the periodic hop landing along its touchdown rates (periodic_hop.periodic_hop) and the
+    feedback that makes it attract (periodic_hop.landing_feedback). Each next law frequency starts from the previous
+    periodic hop with the previous feedback in the loop: :data:`SETTLE_HOPS` hops of the trial (the closed loop
+    attracts where the hop without it is unstable, and where Newton steps from the previous hop stall), whose last
+    touchdown, re-stated with its own landing rates and placement, starts the Newton steps of the periodic hop; that
+    hop gets its own feedback. ``at_seed_frequency``: instead each periodic hop is the one whose period is 1 / its
+    law's frequency (Newton steps on the closed loop with that condition, chosen along the family of periodic hops of
+    other energies; found at 2.2 and 2.1 Hz, not at 2.0 Hz). Stops at the first law frequency where none is found.
+    Returns {frequency: dict of the hop (scenarios.SEED_LIKE_LOSSLESS_HOPS' entries) and its eigenvalues}.
+    """
+    from hop_impedance.simulation.hopping_trial import touchdown_state_vector
+    from hop_impedance.simulation.periodic_hop import landing_feedback, periodic_hop, touchdown_vector
+    from hop_impedance.simulation.scenarios import lossless_hopper_config, seed_like_hopper_options
+
+    chain, config = lossless_hopper_config(path[0], 30, seed_like_hopper_options())
+    cal = _calibration(chain, config)
+    hop = periodic_hop(chain, config, cal, touchdown_vector(cal.speed_m_s, 0.0, cal.com_ahead_m,
+                                                            cal.touchdown_rates_rad_s))
+    config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in hop.state[3:]))
+    hop = periodic_hop(chain, config, cal, hop.state)
+    feedback = None
+    out = {}
+    for freq in path:
+        chain, config = lossless_hopper_config(freq, SETTLE_HOPS, seed_like_hopper_options())
+        landing = hop.state[3:] if feedback is None else feedback.landing_ref
+        config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in landing),
+                                     landing_feedback=feedback)
+        settled = False
+        if feedback is not None and not at_seed_frequency:
+            trial = simulate_hopping(chain, dataclasses.replace(config, com_ahead_m=cal.com_ahead_m,
+                                                                first_touchdown=tuple(float(v) for v in hop.state)))
+            settled = not trial.stop_reason
+            start = touchdown_state_vector(chain, trial.stances[-1].touchdown)
+        if not settled:  # the first law, a periodic hop of period 1/f, or a settling trial that stopped: Newton steps
+            looped = periodic_hop(chain, config, cal, hop.state, period_s=1.0 / freq if at_seed_frequency else None)
+            start, settled = looped.state, looped.success
+        landing_new, ahead = (start[3:], cal.com_ahead_m) if feedback is None else feedback.choose(start)
+        config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in landing_new),
+                                     landing_feedback=None)
+        cal = dataclasses.replace(cal, com_ahead_m=float(ahead))
+        try:
+            hop = periodic_hop(chain, config, cal, start, max_iterations=6)
+        except ValueError as exc:
+            print(f"  {freq:g} Hz: no periodic hop ({exc})", flush=True)
+            break
+        feedback, closed = landing_feedback(chain, config, cal, hop.state)
+        out[freq] = {"state": [float(v) for v in hop.state], "landing_rates_rad_s": list(feedback.landing_ref),
+                     "com_ahead_m": feedback.com_ahead_ref_m, "gain": [list(row) for row in feedback.gain],
+                     "stance_s": hop.stance_s, "flight_s": hop.flight_s, "found": bool(settled and hop.success),
+                     "residual": float(np.abs(hop.residual).max()),
+                     "open_loop_moduli": [float(abs(v)) for v in hop.eigenvalues],
+                     "closed_loop_moduli": [float(abs(v)) for v in closed]}
+        print(f"  {freq:g} Hz: periodic hop {'found' if out[freq]['found'] else 'NOT found'} (max |P(x) - x| "
+              f"{out[freq]['residual']:.1e}), stance {1000 * hop.stance_s:.1f} ms, flight {1000 * hop.flight_s:.1f} ms "
+              f"({1 / (hop.stance_s + hop.flight_s):.2f} Hz), touchdown speed {hop.state[0]:.3f} m/s, COM vx "
+              f"{hop.state[1]:+.3f} m/s; |eigenvalues| landing along fixed rates "
+              + ", ".join(f"{v:.3f}" for v in out[freq]["open_loop_moduli"][:4]) + "; with the landing feedback "
+              + ", ".join(f"{v:.3f}" for v in out[freq]["closed_loop_moduli"][:4]), flush=True)
+        if not out[freq]["found"]:
+            break
+    return out
+
+
+def write_orbits(found: dict, write: bool) -> None:
+    """Print (and with ``write`` write) the periodic hops :func:`find_seed_like_orbits` found, at the seed frequencies."""
+    import yaml
+
+    from hop_impedance.simulation.scenarios import SEED_LIKE_LOSSLESS_HOPS_FILE, SEED_TABLE2
+
+    kept = {f: hop for f, hop in found.items() if f in SEED_TABLE2}
+    text = ("# Issue 17: periodic hops of the seed-like hopper's lossless counterpart and their landing feedback\n"
+            "# (scenarios.seed_like_lossless_config). Written by `nice -n 19 .venv/bin/python "
+            "bench/simulator_energy_budget.py --find-orbits --write`.\n" + yaml.safe_dump({"hops": kept}, sort_keys=True))
+    if write:
+        SEED_LIKE_LOSSLESS_HOPS_FILE.write_text(text, encoding="utf-8")
+        print(f"wrote {SEED_LIKE_LOSSLESS_HOPS_FILE}")
+    else:
+        print(text)
+
+
+def seed_like_lossless_lines(freq_hz: float, hops: int, feedback: bool, perturb: float, calibrated: bool = False) -> str:
+    """The seed-like hopper's lossless counterpart (scenarios.seed_like_lossless_config) hop by hop (:func:`trial_lines`);
+    ``calibrated``: from the calibrated hop with the energy-keeping flight's own rule instead (no stored hop)."""
+    from hop_impedance.simulation.scenarios import (
+        lossless_hopper_config,
+        seed_like_hopper_options,
+        seed_like_lossless_config,
+        seed_like_lossless_hops,
+    )
+
+    if calibrated:
+        chain, config = lossless_hopper_config(freq_hz, hops, seed_like_hopper_options())
+        return trial_lines(chain, config, f"seed-like hopper's lossless counterpart, {freq_hz} Hz law, from the calibrated hop")
+    chain, config = seed_like_lossless_config(freq_hz, hops, feedback)
+    stored = seed_like_lossless_hops()[freq_hz]
+    start = np.asarray(config.first_touchdown, float)
+    start[[0, 3, 4, 5, 6]] *= 1.0 + perturb
+    config = dataclasses.replace(config, first_touchdown=tuple(float(v) for v in start))
+    moduli = stored["closed_loop_moduli" if feedback else "open_loop_moduli"]
+    title = (f"seed-like hopper's lossless counterpart, {freq_hz} Hz law, stored periodic hop (stance "
+             f"{1000 * stored['stance_s']:.1f} ms, flight {1000 * stored['flight_s']:.1f} ms, "
+             f"{1 / (stored['stance_s'] + stored['flight_s']):.2f} Hz; |eigenvalues| "
+             + ", ".join(f"{v:.3f}" for v in moduli[:4]) + ("" if feedback else ", fixed landing rule")
+             + (f"), first touchdown speed and rates x {1 + perturb:g}" if perturb else ")"))
+    return trial_lines(chain, config, title)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hops", type=int, default=5)
@@ -240,7 +369,32 @@ def main() -> None:
                         help="with --lossless: land along the periodic hop's touchdown rates (lossless_hops)")
     parser.add_argument("--periodic", action="store_true",
                         help="with --lossless: also find the periodic hop and its eigenvalues (simulation/periodic_hop.py)")
+    parser.add_argument("--hopper", choices=("seed-like",), default=None,
+                        help="with --lossless: the seed-like hopper's lossless counterpart started on its stored periodic "
+                             "hop with the landing feedback (scenarios.seed_like_lossless_config; --freqs, --hops)")
+    parser.add_argument("--no-feedback", action="store_true", help="with --hopper seed-like: the fixed landing rule")
+    parser.add_argument("--perturb", type=float, default=0.0, metavar="FRACTION",
+                        help="with --hopper seed-like: the first touchdown's speed and segment rates x (1 + FRACTION)")
+    parser.add_argument("--calibrated", action="store_true",
+                        help="with --hopper seed-like: start from the calibrated hop instead (no stored hop, no feedback)")
+    parser.add_argument("--find-orbits", action="store_true",
+                        help="find the stored periodic hops (find_seed_like_orbits); --write writes them into "
+                             "scenarios.SEED_LIKE_LOSSLESS_HOPS_FILE")
+    parser.add_argument("--at-seed-frequency", action="store_true",
+                        help="with --find-orbits: the periodic hops of period 1 / the law's frequency (printed only)")
+    parser.add_argument("--to", type=float, default=ORBIT_PATH[-1], metavar="HZ",
+                        help="with --find-orbits: stop the continuation at this law frequency (one of ORBIT_PATH)")
     args = parser.parse_args()
+    if args.find_orbits:
+        path = ORBIT_PATH[:ORBIT_PATH.index(args.to) + 1]
+        found = find_seed_like_orbits(path, at_seed_frequency=args.at_seed_frequency)
+        write_orbits(found, args.write and not args.at_seed_frequency)
+        return
+    if args.lossless and args.hopper:
+        for freq in (float(f) for f in args.freqs.split(",")):
+            print(seed_like_lossless_lines(freq, args.hops, not args.no_feedback, args.perturb, args.calibrated),
+                  flush=True)
+        return
     if args.lossless:
         for flight in args.flights.split(","):
             for freq in (float(f) for f in args.freqs.split(",")):

@@ -77,7 +77,7 @@ def variant_config(name: str, freq_hz: float):
     """(chain, HoppingConfig) of a named variant at ``freq_hz`` (module docstring)."""
     options = candidate_options()
     kind = name.split("_")[0]
-    values = [float(v) for v in name.split("_") if v.replace(".", "", 1).isdigit()]
+    values = [float(v) for v in name.split("_") if v.lstrip("-").replace(".", "", 1).isdigit()]
     if name.startswith("push_weights_"):
         pass  # the push-off part is replaced below
     elif kind == "late":

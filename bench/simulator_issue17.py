@@ -361,6 +361,9 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
                         help="push-off onset and duration as fractions of the passive stance instead of 0.5,0.5")
     parser.add_argument("--contact-ahead", type=float, default=None, metavar="M",
                         help="ground contact this far ahead of the toe marker (m) instead of the toe tip's")
+    parser.add_argument("--push-weights", metavar="A,K,H",
+                        help="the push-off's amplitude per joint in units of scenarios.PUSH_OFF_BASE_NM instead of 1,0.6,0.3 "
+                             "(a negative knee share: the gastrocnemius' knee flexor moment)")
 
 
 def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
@@ -398,6 +401,9 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     if args.contact_ahead is not None:
         options["contact_ahead_m"] = args.contact_ahead
         said.append(f"contact {args.contact_ahead:g} m ahead of the toe marker")
+    if args.push_weights:
+        options["push_weights"] = floats(args.push_weights, 3)
+        said.append(f"push-off weights {args.push_weights}")
     return options, f"scenarios.{'seed_like_hopper_options' if preset else 'seed_like_options'}(), " + ", ".join(said)
 
 
@@ -415,6 +421,7 @@ def main() -> None:
     freqs = tuple(f for f in FREQS if f in floats(args.freqs))
     variant = any((args.hopper != "seed_like_options", args.bell is not None, args.law_scale != "none", args.surface != "hard",
                    args.pad, args.posture, args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS,
+                   args.push_weights,
                    args.no_seed001, args.seed != 1))
     if args.write and variant:
         parser.error("--write stores seed_like_options' table only")

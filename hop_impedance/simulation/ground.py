@@ -101,8 +101,15 @@ def surface(name: str) -> GroundLaw:
         raise ValueError(f"unknown surface {name!r}; expected one of {sorted(SURFACES)}") from None
 
 
-def lossless(law: GroundLaw) -> GroundLaw:
-    """The same law without damping (for energy bookkeeping)."""
+def lossless(law: Ground) -> Ground:
+    """The same law without damping (for energy bookkeeping); with a pad in series the surface's damper (the pad is
+    elastic) is removed and the pad kept."""
+    if isinstance(law, PaddedGround):
+        return PaddedGround(_undamped(law.surface), law.pad)
+    return _undamped(law)
+
+
+def _undamped(law: GroundLaw) -> GroundLaw:
     return GroundLaw(law.name + "_lossless", law.stiffness, law.exponent, 0.0, law.damping_exponent)
 
 

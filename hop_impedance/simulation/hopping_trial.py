@@ -27,7 +27,9 @@ quantity the analysis uses depends on it.
   the trunk's absolute pitch acting at the hip). With a hip spring in its place
   the energy at touchdown stays the same to 3e-8 over 30 hops and the hop keeps
   its stance time and apex within 1.2 % (test/simulation/test_sim_lossless_hops.py;
-  the hop-to-hop map and its periodic orbits: :mod:`~hop_impedance.simulation.periodic_hop`).
+  the hop-to-hop map and its periodic orbits: :mod:`~hop_impedance.simulation.periodic_hop`). The seed-like
+  hopper's lossless counterpart keeps its hop with a conservative landing feedback (:class:`LandingFeedback`,
+  scenarios.seed_like_lossless_config, test/simulation/test_sim_lossless_seed_like.py).
 
 Touchdown and hop sequencing
 ----------------------------
@@ -52,7 +54,7 @@ Touchdown and hop sequencing
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 from scipy.interpolate import BPoly
@@ -89,6 +91,43 @@ def joint_triple(values: Iterable[float]) -> tuple[float, float, float]:
     """Three per-joint values (ankle, knee, hip) as floats, e.g. :attr:`HoppingConfig.touchdown_rho_rad`."""
     ankle, knee, hip = (float(v) for v in values)
     return ankle, knee, hip
+
+
+@dataclass(frozen=True)
+class LandingFeedback:
+    """Issue 17: a conservative landing controller for the energy-keeping flight (:func:`landing_for_hop`).
+
+    In flight the hopper chooses how it lands, from the touchdown state ``x`` of the hop it is in
+    (:mod:`~hop_impedance.simulation.periodic_hop`'s vector: touchdown speed, COM vx, COM ahead of the toe,
+    segment rates): the direction of its landing segment rates ``landing_ref + u[:4]`` and the foot placement's
+    reference offset ``com_ahead_ref_m + u[4]``, with ``u = -gain (x - state_ref)``. Neither changes the energy
+    (the flight gives the landing rates the energy it carries, whatever their direction, and the placement only
+    turns the touchdown posture about the toe), so the hopper stays conservative; a periodic hop ``state_ref``
+    whose landing and placement are ``landing_ref``, ``com_ahead_ref_m`` stays periodic, and ``gain``
+    (:func:`~hop_impedance.simulation.periodic_hop.landing_feedback`) makes it attract nearby hops of the same
+    energy (hops of another energy go to the periodic hop of theirs: nothing restores energy without work).
+
+    Attributes
+    ----------
+    state_ref : 7 floats
+        The periodic hop's touchdown state.
+    landing_ref : 4 floats
+        Its landing rates (rad/s; HoppingConfig.landing_rates_rad_s).
+    com_ahead_ref_m : float
+        Its foot placement's reference offset (m; HopCalibration.com_ahead_m).
+    gain : 5 x 7 nested tuples
+        Feedback gain (rad/s and m per unit of the state's entries).
+    """
+
+    state_ref: tuple[float, ...]
+    landing_ref: tuple[float, ...]
+    com_ahead_ref_m: float
+    gain: tuple[tuple[float, ...], ...]
+
+    def choose(self, x: np.ndarray) -> tuple[np.ndarray, float]:
+        """(landing rates rad/s shape (4,), placement reference m) for touchdown state ``x``."""
+        u = -np.asarray(self.gain, float) @ (np.asarray(x, float) - np.asarray(self.state_ref, float))
+        return np.asarray(self.landing_ref, float) + u[:4], self.com_ahead_ref_m + float(u[4])
 
 
 @dataclass(frozen=True)
@@ -140,6 +179,12 @@ class HoppingConfig:
         The first touchdown state instead of the calibrated one: touchdown speed (m/s, down), COM vx
         (m/s), COM ahead of the toe (m), segment rates q1..q4 (rad/s), e.g. a periodic hop's
         (:func:`~hop_impedance.simulation.periodic_hop.periodic_hop`). None (default): calibrated.
+        Given, the trial is not calibrated (:func:`given_start_calibration`): the push-off keeps its
+        scale 1 and the foot placement's reference is ``com_ahead_m``.
+    landing_feedback : LandingFeedback or None
+        Energy-keeping flight only: choose each landing's rates and the foot placement's reference from the
+        hop's own touchdown state (:class:`LandingFeedback`, :func:`landing_for_hop`) instead of the fixed
+        ``landing_rates_rad_s`` and ``com_ahead_m``. None (default): fixed.
     """
 
     freq_hz: float
@@ -160,8 +205,9 @@ class HoppingConfig:
     friction_coefficient: float | None = DEFAULT_FRICTION_COEFFICIENT
     trunk_balance: TrunkBalance | None = None
     flight: str = "prescribed"
-    landing_rates_rad_s: tuple[float, float, float, float] | None = None
+    landing_rates_rad_s: tuple[float, ...] | None = None
     first_touchdown: tuple[float, ...] | None = None
+    landing_feedback: LandingFeedback | None = None
 
     def __post_init__(self) -> None:
         if self.flight not in FLIGHT_MODELS:
@@ -635,7 +681,10 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
     """
     rng = np.random.default_rng(seed)
     rho_nom = np.asarray(config.touchdown_rho_rad, float)
-    cal = calibrate(chain, config, touchdown_posture(chain, rho_nom, config.com_ahead_m))
+    if config.first_touchdown is None:
+        cal = calibrate(chain, config, touchdown_posture(chain, rho_nom, config.com_ahead_m))
+    else:
+        cal = given_start_calibration(config)
     notes = [] if cal.success else [_calibration_note(config, cal)]
     period = 1.0 / config.freq_hz
     q_td = touchdown_posture(chain, rho_nom, cal.com_ahead_m)
@@ -664,10 +713,11 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
         if stop:
             break
         v_to = com_velocity(chain, st.g[-1], st.gd[-1])
-        q_next = _next_posture(chain, config, cal, rho_nom + rng.normal(0.0, config.posture_sd_rad, 3),
+        hop_config, hop_cal = landing_for_hop(chain, config, cal, td)
+        q_next = _next_posture(chain, hop_config, hop_cal, rho_nom + rng.normal(0.0, config.posture_sd_rad, 3),
                                float(v_to[0]), st.duration_s)
         try:
-            nxt = _flight_to_next_touchdown(chain, config, law, st, q_next, t_end, last=i == config.n_hops - 1)
+            nxt = _flight_to_next_touchdown(chain, hop_config, law, st, q_next, t_end, last=i == config.n_hops - 1)
         except ValueError as exc:
             stop = f"hop {i}: {exc}"
             break
@@ -678,6 +728,39 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
         t_td = t_end + nxt.flight.duration_s
         t_end = t_td
     return HoppingTrial(config, chain, stances, flights, t_end, cal, stop, notes)
+
+
+def given_start_calibration(config: HoppingConfig) -> HopCalibration:
+    """The :class:`HopCalibration` of a trial that starts from ``config.first_touchdown`` (a known hop, e.g. a periodic
+    one) instead of calibrating: its touchdown speed and rates, push-off scale 1 without the hop-by-hop correction
+    (gain 0), and the foot placement's reference offset ``config.com_ahead_m``. The stance, flight and take-off
+    figures are not computed (NaN): the trial's first hop is that hop."""
+    if config.first_touchdown is None:
+        raise ValueError("given_start_calibration needs HoppingConfig.first_touchdown")
+    speed, *_, r1, r2, r3, r4 = (float(v) for v in config.first_touchdown)
+    return HopCalibration(speed_m_s=speed, push_scale=1.0, stance_s=np.nan, flight_s=np.nan, next_speed_m_s=np.nan,
+                          d_speed_d_scale=0.0, success=True, com_ahead_m=config.com_ahead_m, take_off_vx_m_s=np.nan,
+                          d_vx_d_com_ahead_s=np.nan, touchdown_rates_rad_s=np.array([r1, r2, r3, r4]))
+
+
+def touchdown_state_vector(chain: Chain, td: TouchdownState) -> np.ndarray:
+    """The hop map's state of a touchdown (periodic_hop.STATE_NAMES): touchdown speed (m/s, down), COM vx (m/s), COM
+    ahead of the toe (m), segment rates q1..q4 (rad/s)."""
+    v = com_velocity(chain, td.g, td.gd)
+    return np.r_[-v[1], v[0], body_com(chain, td.g)[0] - td.g[0], td.gd[2:]]
+
+
+def landing_for_hop(chain: Chain, config: HoppingConfig, cal: HopCalibration,
+                    td: TouchdownState) -> tuple[HoppingConfig, HopCalibration]:
+    """The configuration and calibration the flight after the hop that touched down in ``td`` uses: with
+    ``config.landing_feedback`` its landing rates and foot placement reference (:class:`LandingFeedback`), else
+    ``config`` and ``cal`` themselves."""
+    feedback = config.landing_feedback
+    if feedback is None:
+        return config, cal
+    landing, ahead = feedback.choose(touchdown_state_vector(chain, td))
+    return (replace(config, landing_rates_rad_s=tuple(float(r) for r in landing)),
+            replace(cal, com_ahead_m=float(ahead)))
 
 
 def _calibration_note(config: HoppingConfig, cal: HopCalibration) -> str:

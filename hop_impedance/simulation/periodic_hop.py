@@ -14,11 +14,16 @@ touchdown posture (the joint angles stay ``touchdown_rho_rad``), and the flight
 (central differences) say whether a small error grows (some ``|lambda| > 1``) or dies out. One
 eigenvalue is 0 by construction: the touchdown rates' part that would slide the toe is removed
 (:func:`~hop_impedance.simulation.hopping_trial.touchdown_state`), so ``P`` ignores it.
+
+A conservative hopper keeps its energy, so its periodic hops come in a family (one eigenvalue 1) and nothing but
+the landing can steer it: :func:`landing_feedback` chooses the landing rates and the foot placement from the hop's
+touchdown state (:class:`~hop_impedance.simulation.hopping_trial.LandingFeedback`, a linear-quadratic regulator on
+``P``), which keeps the energy and makes the periodic hop attract (issue 17, session 15).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -26,7 +31,9 @@ from hop_impedance.simulation.dynamics import Chain, com_velocity
 from hop_impedance.simulation.hopping_trial import (
     HopCalibration,
     HoppingConfig,
+    LandingFeedback,
     _flight_to_next_touchdown,
+    landing_for_hop,
     scale_push_off,
     touchdown_posture,
     touchdown_state,
@@ -61,6 +68,7 @@ def hop_step(chain: Chain, config: HoppingConfig, cal: HopCalibration,
     if st.end_reason != "take_off":
         raise ValueError(f"stance ended by {st.end_reason}")
     vx_to = float(com_velocity(chain, st.g[-1], st.gd[-1])[0])
+    config, cal = landing_for_hop(chain, config, cal, td)
     ahead_next = cal.com_ahead_m - vx_to * (0.5 * st.duration_s + config.placement_gain_s)
     nxt = _flight_to_next_touchdown(chain, config, law, st, touchdown_posture(chain, rho, ahead_next), 0.0,
                                     last=False)
@@ -89,6 +97,8 @@ class PeriodicHop:
         Of ``dP/dx`` at the fixed point, largest modulus first (one is ~0, module docstring).
     jacobian : ndarray, shape (7, 7)
         ``dP/dx`` they are computed from.
+    com_ahead_m : float
+        The foot placement's reference offset it was found with (``HopCalibration.com_ahead_m``, m).
     """
 
     state: np.ndarray
@@ -98,6 +108,7 @@ class PeriodicHop:
     flight_s: float
     eigenvalues: np.ndarray
     jacobian: np.ndarray
+    com_ahead_m: float
 
     @property
     def spectral_radius(self) -> float:
@@ -107,34 +118,91 @@ class PeriodicHop:
 
 def hop_map_jacobian(chain: Chain, config: HoppingConfig, cal: HopCalibration, x: np.ndarray) -> np.ndarray:
     """``dP/dx`` (7 x 7) at ``x`` by central differences (:data:`JACOBIAN_STEPS`)."""
-    jac = np.zeros((7, 7))
-    for k, h in enumerate(JACOBIAN_STEPS):
-        step = np.zeros(7)
+    return _central_differences(lambda v: hop_step(chain, config, cal, v)[0], np.asarray(x, float), JACOBIAN_STEPS)
+
+
+def _central_differences(fun, x: np.ndarray, steps: np.ndarray) -> np.ndarray:
+    """Jacobian of ``fun`` at ``x`` by central differences with one step per entry of ``x``."""
+    columns = []
+    for k, h in enumerate(steps):
+        step = np.zeros(len(x))
         step[k] = h
-        jac[:, k] = (hop_step(chain, config, cal, x + step)[0] - hop_step(chain, config, cal, x - step)[0]) / (2 * h)
-    return jac
+        columns.append((fun(x + step) - fun(x - step)) / (2 * h))
+    return np.array(columns).T
+
+
+#: Central-difference step of the foot placement's reference offset (m) when :func:`periodic_hop` solves for it.
+PLACEMENT_STEP_M = 1e-6
+
+
+@dataclass(frozen=True)
+class _OrbitConditions:
+    """What :func:`periodic_hop` solves for besides ``P(x) = x``: with ``in_place`` also the foot placement's
+    reference offset (``HopCalibration.com_ahead_m``, unknown ``z[7]``) so that the hop stays in place (COM vx 0 at
+    touchdown); with ``period_s`` the periodic hop of that period (stance + flight), chosen along the family of
+    periodic hops of a conservative hopper; with ``own_landing`` the energy-keeping flight's landing rule
+    (``HoppingConfig.landing_rates_rad_s``) lands along the hop's own touchdown rates, so the rule's direction is an
+    unknown too (its fixed point is then a fixed point of the trial that lands along them)."""
+
+    chain: Chain
+    config: HoppingConfig
+    cal: HopCalibration
+    in_place: bool
+    period_s: float | None
+    own_landing: bool
+
+    def calibration(self, z: np.ndarray) -> HopCalibration:
+        return replace(self.cal, com_ahead_m=float(z[7])) if self.in_place else self.cal
+
+    def landing_config(self, x: np.ndarray) -> HoppingConfig:
+        """The configuration whose landing rule lands along the state's own touchdown rates (``own_landing``)."""
+        return replace(self.config, landing_rates_rad_s=tuple(float(v) for v in x[3:7])) if self.own_landing else self.config
+
+    def residual(self, z: np.ndarray) -> np.ndarray:
+        x = z[:7]
+        nxt, st = hop_step(self.chain, self.landing_config(x), self.calibration(z), x)
+        out = [nxt - x]
+        if self.in_place:
+            out.append([x[1]])
+        if self.period_s is not None:
+            out.append([st.duration_s + _flight_s(self.chain, st, float(nxt[0])) - self.period_s])
+        return np.concatenate(out)
+
+    def steps(self) -> np.ndarray:
+        return np.r_[JACOBIAN_STEPS, [PLACEMENT_STEP_M] if self.in_place else []]
+
+
+def _flight_s(chain: Chain, st: StanceSimulation, next_speed_m_s: float) -> float:
+    """Flight time (s) after stance ``st`` to a touchdown at ``next_speed_m_s`` (ballistic COM)."""
+    return (next_speed_m_s + float(com_velocity(chain, st.g[-1], st.gd[-1])[1])) / chain.gravity_m_s2
 
 
 def periodic_hop(chain: Chain, config: HoppingConfig, cal: HopCalibration, guess: np.ndarray,
-                 max_iterations: int = 12, tolerance: float = 1e-6) -> PeriodicHop:
+                 max_iterations: int = 12, tolerance: float = 1e-6, in_place: bool = False,
+                 period_s: float | None = None, own_landing: bool = False) -> PeriodicHop:
     """The periodic hop nearest ``guess``: a root of ``P(x) - x`` by damped Newton steps, and its eigenvalues.
 
-    Each step solves ``(J - I) dx = -(P(x) - x)`` with ``J`` = :func:`hop_map_jacobian` (least squares:
+    Each step solves ``(J - I) dx = -(P(x) - x)`` with ``J`` = ``dP/dx`` (:func:`hop_map_jacobian`; least squares:
     ``J - I`` is singular along a family of periodic hops of a conservative hopper) and halves the step
     until the residual falls (at most 6 times). Stops when ``max |P(x) - x| < tolerance``. The
     eigenvalues are those of the last Jacobian (at the returned state, or one step before it).
+    ``in_place``: also solve for the foot placement's reference offset that keeps the hop in place (COM vx 0;
+    returned in ``PeriodicHop.com_ahead_m``); ``period_s``: the periodic hop of that period; ``own_landing``: land along
+    the hop's own touchdown rates (:class:`_OrbitConditions`; the eigenvalues are then those of the trial landing along
+    the found rates, a fixed rule).
     """
-    x = np.asarray(guess, float)
-    res = hop_step(chain, config, cal, x)[0] - x
-    jac = hop_map_jacobian(chain, config, cal, x)
+    cond = _OrbitConditions(chain, config, cal, in_place, period_s, own_landing)
+    z = np.r_[np.asarray(guess, float), [cal.com_ahead_m] if in_place else []]
+    res = cond.residual(z)
+    jac = _central_differences(cond.residual, z, cond.steps())
     for _ in range(max_iterations):
         if np.abs(res).max() < tolerance:
             break
-        dx = np.linalg.lstsq(jac - np.eye(7), -res, rcond=None)[0]
+        dz = np.linalg.lstsq(jac, -res, rcond=None)[0]  # jac: of the residual, i.e. [J - I, ...]
         lam = 1.0
         for _ in range(6):
             try:
-                trial_res = hop_step(chain, config, cal, x + lam * dx)[0] - (x + lam * dx)
+                trial_res = cond.residual(z + lam * dz)
             except ValueError:
                 lam /= 2
                 continue
@@ -142,13 +210,57 @@ def periodic_hop(chain: Chain, config: HoppingConfig, cal: HopCalibration, guess
                 break
             lam /= 2
         else:
-            break  # no step along dx lowers the residual
-        x, res = x + lam * dx, trial_res
-        jac = hop_map_jacobian(chain, config, cal, x)
-    nxt, st = hop_step(chain, config, cal, x)
-    speed_next = float(nxt[0])
-    flight_s = (speed_next + float(com_velocity(chain, st.g[-1], st.gd[-1])[1])) / chain.gravity_m_s2
-    eig = np.linalg.eigvals(jac)
+            break  # no step along dz lowers the residual
+        z, res = z + lam * dz, trial_res
+        jac = _central_differences(cond.residual, z, cond.steps())
+    x = z[:7]
+    nxt, st = hop_step(chain, cond.landing_config(x), cond.calibration(z), x)
+    hop_jac = jac[:7, :7] + np.eye(7)  # dP/dx
+    if own_landing:  # the trial's map lands along the found rates, held fixed
+        hop_jac = hop_map_jacobian(chain, cond.landing_config(x), cond.calibration(z), x)
+    eig = np.linalg.eigvals(hop_jac)
     eig = eig[np.argsort(-np.abs(eig))]
-    res = nxt - x
-    return PeriodicHop(x, res, bool(np.abs(res).max() < tolerance), st.duration_s, flight_s, eig, jac)
+    res = cond.residual(z)
+    return PeriodicHop(x, res, bool(np.abs(res).max() < tolerance), st.duration_s, _flight_s(chain, st, float(nxt[0])),
+                       eig, hop_jac, cond.calibration(z).com_ahead_m)
+
+
+#: Central-difference steps of the landing controls (:func:`landing_feedback`): landing rates (rad/s) and the foot
+#: placement's reference offset (m).
+CONTROL_STEPS = np.array([1e-4, 1e-4, 1e-4, 1e-4, 1e-6])
+
+
+def landing_feedback(chain: Chain, config: HoppingConfig, cal: HopCalibration, state: np.ndarray,
+                     discount: float = 1.02, control_weight: float = 1.0) -> tuple[LandingFeedback, np.ndarray]:
+    """A :class:`~hop_impedance.simulation.hopping_trial.LandingFeedback` about the touchdown state ``state`` (a periodic
+    hop found landing along ``config.landing_rates_rad_s`` with the placement reference ``cal.com_ahead_m``, which it
+    makes attract nearby hops), and the closed loop's eigenvalues there (largest modulus first).
+
+    Linear-quadratic regulator on the hop map linearised there, ``dx' = A dx + B du`` (central differences;
+    ``u`` = landing rates and placement reference, :data:`CONTROL_STEPS`), with unit weights on the state and
+    ``control_weight`` on the controls. The hop's energy is an invariant no landing changes (``A`` has the eigenvalue
+    1 along it, out of ``B``'s reach), so the regulator is solved for ``A / discount`` (``discount`` > 1 moves that
+    eigenvalue inside the unit circle); the closed loop keeps it at 1 and damps the rest. About a state that is not
+    periodic the same feedback holds the hop near it: its closed loop's periodic hop is a start for the open loop's.
+    """
+    from scipy.linalg import solve_discrete_are
+
+    if config.landing_rates_rad_s is None:
+        raise ValueError("landing_feedback needs the landing rule the periodic hop was found with (landing_rates_rad_s)")
+    landing0 = np.asarray(config.landing_rates_rad_s, float)
+    x0 = np.asarray(state, float)
+
+    def controlled(u: np.ndarray) -> np.ndarray:
+        cfg = replace(config, landing_rates_rad_s=tuple(float(v) for v in landing0 + u[:4]))
+        return hop_step(chain, cfg, replace(cal, com_ahead_m=cal.com_ahead_m + float(u[4])), x0)[0]
+
+    a = hop_map_jacobian(chain, config, cal, x0)
+    b = _central_differences(controlled, np.zeros(5), CONTROL_STEPS)
+    q, r = np.eye(7), control_weight * np.eye(5)
+    a_s, b_s = a / discount, b / discount
+    p = solve_discrete_are(a_s, b_s, q, r)
+    gain = np.linalg.solve(r + b_s.T @ p @ b_s, b_s.T @ p @ a_s)
+    eig = np.linalg.eigvals(a - b @ gain)
+    feedback = LandingFeedback(tuple(float(v) for v in x0), tuple(float(v) for v in landing0), float(cal.com_ahead_m),
+                               tuple(tuple(float(v) for v in row) for row in gain))
+    return feedback, eig[np.argsort(-np.abs(eig))]

@@ -10,17 +10,25 @@ so that the discovery workflow can hide them one at a time.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
 
 import numpy as np
+import yaml
 
 from hop_impedance.biomech.body_model import DE_LEVA, body_model_from_stature
 from hop_impedance.recording import GRAVITY_M_S2, Subject
 from hop_impedance.seed_tables import JOINTS as TABLE2_JOINTS
 from hop_impedance.seed_tables import TABLE2_EQ10
 from hop_impedance.simulation.dynamics import Chain, chain_from_body_model, contact_ahead_of_toe_marker
-from hop_impedance.simulation.ground import Ground, GroundLaw, surface, with_pad
-from hop_impedance.simulation.hopping_trial import HoppingConfig, joint_triple, touchdown_posture, touchdown_state
+from hop_impedance.simulation.ground import Ground, GroundLaw, lossless, surface, with_pad
+from hop_impedance.simulation.hopping_trial import (
+    HoppingConfig,
+    LandingFeedback,
+    joint_triple,
+    touchdown_posture,
+    touchdown_state,
+)
 from hop_impedance.simulation.impedance_laws import (
     BellActivation,
     CompositeLaw,
@@ -247,10 +255,11 @@ def law_scale_at(law_scale: dict | None, freq_hz: float) -> tuple[np.ndarray, np
 
 def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_duration_s: float,
               hip_trunk_spring_nm_rad: float = 0.0, bell: BellActivation | None = None,
-              law_scale: dict | None = None) -> ImpedanceLaw:
+              law_scale: dict | None = None, push_weights=PUSH_OFF_WEIGHTS) -> ImpedanceLaw:
     """The joint law for a frequency with the chosen effects (``hip_trunk_spring_nm_rad`` is added to the
     hip's k0: :data:`HIP_TRUNK_SPRING_NM_RAD`; ``bell`` scales the elastic moment, instead of
-    :data:`ACTIVATION`, which it excludes; ``law_scale`` multiplies Table 2's k0 and k1, :func:`law_scale_at`)."""
+    :data:`ACTIVATION`, which it excludes; ``law_scale`` multiplies Table 2's k0 and k1, :func:`law_scale_at`;
+    ``push_weights`` shares the push-off between ankle, knee and hip, :data:`PUSH_OFF_WEIGHTS`)."""
     if bell is not None and effects.time_activation:
         raise ValueError("one activation per law: the bell excludes Effects.time_activation")
     k0, k1 = seed_stiffness(freq_hz)
@@ -268,7 +277,7 @@ def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_durati
     )
     if not effects.push_off:
         return CompositeLaw((eq3,))
-    push = PushOff(PUSH_OFF_BASE_NM * np.array(PUSH_OFF_WEIGHTS), push_onset_s, push_duration_s)
+    push = PushOff(PUSH_OFF_BASE_NM * np.asarray(push_weights, float), push_onset_s, push_duration_s)
     return CompositeLaw((eq3, push))
 
 
@@ -299,7 +308,7 @@ def hopping_config(
     push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     hip_trunk_spring_nm_rad: float = 0.0,
     bell_activation_min: float | None = None, law_scale: dict | None = None,
-    pad: GroundLaw | None = None,
+    pad: GroundLaw | None = None, push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
@@ -316,7 +325,8 @@ def hopping_config(
     (:data:`SEED_LIKE_BELL_MIN`; None: none): a :class:`BellActivation` from it over the passive stance; ``law_scale``
     (:data:`SEED_LIKE_LAW_SCALE`; None: Table 2): factors on Table 2's k0, k1 (:func:`law_scale_at`), in the truth.
     ``pad`` (e.g. :data:`SHOE_PAD`; None: none): an elastic pad in series with every surface of the trial
-    (:class:`~hop_impedance.simulation.ground.PaddedGround`), stated in the truth file's surface.
+    (:class:`~hop_impedance.simulation.ground.PaddedGround`), stated in the truth file's surface. ``push_weights``:
+    the push-off's amplitude per joint in units of :data:`PUSH_OFF_BASE_NM` (default :data:`PUSH_OFF_WEIGHTS`).
     """
     chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
     expected = with_pad(surface(calibration_surface or surface_name), pad)
@@ -325,7 +335,7 @@ def hopping_config(
     ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
     bell = None if bell_activation_min is None else BellActivation(bell_activation_min, ts)
     law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts, hip_trunk_spring_nm_rad, bell,
-                    law_scale)
+                    law_scale, push_weights)
     config = HoppingConfig(
         freq_hz=freq_hz, n_hops=n_hops, surface=expected, law=law,
         touchdown_rho_rad=joint_triple(touchdown_rho_rad),
@@ -340,3 +350,65 @@ def hopping_config(
         config = HoppingConfig(**{**config.__dict__, "unexpected_surface": with_pad(surface(surface_name), pad),
                                   "unexpected_hops": tuple(range(n_hops))})
     return chain, config
+
+
+#: How :func:`lossless_hopper_config` holds the trunk: by a hip spring of the trunk balance's stiffness (conservative)
+#: or by the balance itself (no potential: the hop gains or loses its work, docs/simulator.md).
+TRUNK_HOLDS = ("hip_spring", "balance")
+
+
+def lossless_hopper_config(freq_hz: float, n_hops: int, options: dict, surface_name: str = "rigid",
+                           trunk: str = "hip_spring") -> tuple[Chain, HoppingConfig]:
+    """Issue 17's lossless counterpart of the hopper that ``options`` describe (:func:`hopping_config` keyword options,
+    e.g. :func:`seed_like_hopper_options`).
+
+    Everything that does work on the hopper or takes it is removed, the rest kept: no push-off, no damping (b0 = 0),
+    no bell activation (a stiffness that changes with time does work: the Eq. 3 springs at a(t) = 1, Table 2 x the
+    options' ``law_scale``), the surface without its damper (an elastic shoe pad kept, :func:`~hop_impedance.
+    simulation.ground.lossless`), no sliding (friction None), the energy-keeping flight, no noise. ``trunk``
+    "hip_spring" (default) holds the trunk by a hip spring of the options' trunk balance's stiffness about the
+    touchdown hip angle (added to the hip's k0; ``hip_trunk_spring_nm_rad``), "balance" keeps the balance moment (on
+    the trunk's absolute pitch: no potential, :data:`HIP_TRUNK_SPRING_NM_RAD`).
+    """
+    if trunk not in TRUNK_HOLDS:
+        raise ValueError(f"trunk must be one of {TRUNK_HOLDS}, got {trunk!r}")
+    kept = {k: v for k, v in options.items() if k not in ("push_timing", "bell_activation_min")}
+    balance = kept.get("trunk_balance")
+    if trunk == "hip_spring" and balance is not None:
+        kept = {**kept, "trunk_balance": None, "hip_trunk_spring_nm_rad": balance.stiffness_nm_rad}
+    chain, config = hopping_config(freq_hz, surface_name, n_hops, Effects(damping=False, push_off=False),
+                                   variability=False, flight="energy_keeping", **kept)
+    return chain, replace(config, surface=lossless(config.surface), friction_coefficient=None)
+
+
+#: Issue 17: the periodic hops of the seed-like hopper's lossless counterpart (:func:`seed_like_lossless_config`), one
+#: per seed frequency's law, with their landing feedback; written by ``bench/simulator_energy_budget.py --find-orbits
+#: --write`` (continuation from 2.2 Hz, periodic_hop.periodic_hop and periodic_hop.landing_feedback).
+SEED_LIKE_LOSSLESS_HOPS_FILE = Path(__file__).resolve().parent.parent / "data" / "seed_like_lossless_hops.yaml"
+
+
+def seed_like_lossless_hops() -> dict[float, dict]:
+    """{law frequency (Hz): periodic hop} from :data:`SEED_LIKE_LOSSLESS_HOPS_FILE`: its touchdown state ``state``
+    (periodic_hop.STATE_NAMES), ``landing_rates_rad_s``, the placement reference ``com_ahead_m``, the feedback
+    ``gain`` (5 x 7), its stance and flight (s) and the eigenvalue moduli with and without the feedback."""
+    with open(SEED_LIKE_LOSSLESS_HOPS_FILE, encoding="utf-8") as fh:
+        return {float(f): hop for f, hop in yaml.safe_load(fh)["hops"].items()}
+
+
+def seed_like_lossless_config(freq_hz: float, n_hops: int = 30, feedback: bool = True) -> tuple[Chain, HoppingConfig]:
+    """Issue 17's lossless counterpart of the seed-like hopper (:func:`lossless_hopper_config` of
+    :func:`seed_like_hopper_options`: no push-off, damping, bell or surface damper; the trunk held by a hip spring of
+    the trunk balance's 500 N m/rad) at a seed frequency's law, started on its periodic hop
+    (:func:`seed_like_lossless_hops`) and landing along that hop's rates; ``feedback`` (default) with the landing
+    feedback that makes the hop attract (:class:`~hop_impedance.simulation.hopping_trial.LandingFeedback`), else the
+    fixed landing rule and placement (the bare periodic hop, unstable at the lower frequencies' laws)."""
+    hops = seed_like_lossless_hops()
+    if freq_hz not in hops:
+        raise ValueError(f"no lossless periodic hop stored for {freq_hz} Hz; stored: {sorted(hops)}")
+    hop = hops[freq_hz]
+    chain, config = lossless_hopper_config(freq_hz, n_hops, seed_like_hopper_options())
+    state, landing = tuple(float(v) for v in hop["state"]), tuple(float(v) for v in hop["landing_rates_rad_s"])
+    rule = LandingFeedback(state, landing, float(hop["com_ahead_m"]),
+                           tuple(tuple(float(v) for v in row) for row in hop["gain"])) if feedback else None
+    return chain, replace(config, com_ahead_m=float(hop["com_ahead_m"]), first_touchdown=state,
+                          landing_rates_rad_s=landing, landing_feedback=rule)

@@ -14,6 +14,7 @@ from hop_impedance.simulation.impedance_laws import TrunkBalance
 from hop_impedance.simulation.scenarios import (
     DEFAULT_TOUCHDOWN_RHO,
     PUSH_OFF_TIMING,
+    PUSH_OFF_WEIGHTS,
     SEED_SUBJECT,
     Effects,
     hopping_config,
@@ -29,6 +30,7 @@ def simulate_recording(
     variability: bool = True, generator: dict | None = None, trunk_balance: TrunkBalance | None = None,
     flight: str = "prescribed", contact_ahead_m: float = 0.0, push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     bell_activation_min: float | None = None, law_scale: dict | None = None, pad: GroundLaw | None = None,
+    push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS,
 ) -> tuple[Recording, dict]:
     """Simulate a hopping trial and sample it as a contract recording.
 
@@ -38,9 +40,8 @@ def simulate_recording(
         Target hop frequency (Hz); stiffness from seed Table 2 (interpolated).
     surface_name : {"hard", "soft", "rigid"}
         Surface under every hop unless ``unexpected_surface`` is given.
-    n_hops : int
-    seed : int
-        Seeds hop-to-hop variability and sensor noise.
+    n_hops, seed : int
+        Hops; the seed of hop-to-hop variability and sensor noise.
     effects : Effects
         Which law effects are present.
     sensors : SensorConfig
@@ -62,20 +63,19 @@ def simulate_recording(
     trunk_balance, flight, contact_ahead_m, push_timing, bell_activation_min :
         Trunk-balance moment at the hip, flight model, ground contact ahead of the toe marker (m) and
         push-off onset/duration as fractions of the passive stance (:func:`hopping_config`; defaults:
-        none, prescribed, 0 = at the marker, :data:`PUSH_OFF_TIMING`); ``bell_activation_min``, ``law_scale``, ``pad`` too.
-        :func:`seed_like_options` bundles issue 17's candidate.
+        none, prescribed, 0 = at the marker, :data:`PUSH_OFF_TIMING`); ``bell_activation_min``, ``law_scale``, ``pad``,
+        ``push_weights`` too; :func:`seed_like_options` bundles issue 17's candidate.
 
     Returns
     -------
-    recording : Recording
-    truth : dict
-        See :mod:`hop_impedance.simulation.truth`.
+    (recording : Recording, truth : dict, see :mod:`hop_impedance.simulation.truth`)
     """
     chain, config = hopping_config(
         freq_hz, surface_name, n_hops, effects, subject=subject, touchdown_rho_rad=touchdown_rho_rad,
         unexpected_surface=unexpected_surface, unexpected_hops=unexpected_hops, calibration_surface=tuned_for,
         variability=variability, trunk_balance=trunk_balance, flight=flight, contact_ahead_m=contact_ahead_m,
-        push_timing=push_timing, bell_activation_min=bell_activation_min, law_scale=law_scale, pad=pad)
+        push_timing=push_timing, bell_activation_min=bell_activation_min, law_scale=law_scale, pad=pad,
+        push_weights=push_weights)
     trial = simulate_hopping(chain, config, seed=seed)
     recording, sensor_truth = sample_recording(trial, sensors, subject, np.random.default_rng([seed, 1]))
     gen = {"seed": seed, "freq_hz": freq_hz, "surface": surface_name, "n_hops": n_hops,

@@ -9,8 +9,6 @@ spring is conservative, and only with it does the hop keep its energy.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 from scipy.integrate import trapezoid
@@ -22,19 +20,14 @@ from hop_impedance.simulation.dynamics import (
     internal_kinetic_energy_j,
     mechanical_energy_j,
 )
-from hop_impedance.simulation.ground import HARD, lossless
 from hop_impedance.simulation.hopping_trial import flight_segment_rates, simulate_hopping, simulate_resample
 from hop_impedance.simulation.periodic_hop import hop_step, touchdown_vector
-from hop_impedance.simulation.scenarios import HIP_TRUNK_SPRING_NM_RAD, Effects, hopping_config, seed_like_options
+from hop_impedance.simulation.scenarios import lossless_hopper_config, seed_like_options
 
 
 def lossless_trial(hops: int, hip_spring: bool):
-    options = {k: v for k, v in seed_like_options().items() if k not in ("push_timing", "bell_activation_min")}
-    if hip_spring:
-        options = {**options, "trunk_balance": None, "hip_trunk_spring_nm_rad": HIP_TRUNK_SPRING_NM_RAD}
-    chain, config = hopping_config(2.2, "hard", hops, Effects(damping=False, push_off=False), variability=False,
-                                   flight="energy_keeping", **options)
-    config = dataclasses.replace(config, surface=lossless(HARD), friction_coefficient=None)
+    chain, config = lossless_hopper_config(2.2, hops, seed_like_options(), "hard",
+                                           "hip_spring" if hip_spring else "balance")
     return simulate_hopping(chain, config, seed=1)
 
 
