@@ -88,6 +88,11 @@ WORK_ALPHA = 0.05
 #: take-off on the outside rigid nulls, -2.45 ms on our simulator's null, and early on the second generator's, -2..-13
 #: ms with the table body: ``bench/discovery_stance_edges.py``, docs/discovery.md "Session 15".)
 TWO_SIDED_DURATION = False
+#: Session 15's option (:mod:`hop_impedance.discovery.surface_shot`; NOT the default, docs/discovery.md "Session 15"):
+#: in a round whose current model has the surface, every model is judged on this many held-out folds, each fold's
+#: model with its own surface law chosen through the simulation on the fold's training stances. 0: leave-one-out
+#: with the toe fit's surface (sessions 1-14).
+SURFACE_FOLDS = 0
 
 _CONTEXT: dict = {}
 
@@ -112,6 +117,8 @@ class HeldOutRuns:
     end_reasons : list of str
     seconds : float
         CPU-side wall time spent on this model's runs (s).
+    surface_factors : list of dict or None
+        With :data:`SURFACE_FOLDS`: per fold the held-out stances and the shot surface's factors on ``k, n, d``.
     """
 
     effect: str | None
@@ -122,6 +129,7 @@ class HeldOutRuns:
     net_work_j: np.ndarray
     end_reasons: list
     seconds: float = 0.0
+    surface_factors: list | None = None
 
     def figures(self, scales: np.ndarray) -> dict:
         """Pooled held-out gap: ``total`` (mean G_i, first key) then per-signal RMS (and RMS / scale) and duration."""
@@ -321,6 +329,17 @@ def _in_sample_one(task: tuple) -> dict:
     return {k: out[k] for k in ("gap", "samples", "terms")}
 
 
+def _figures_one(task: tuple) -> dict:
+    """Simulate stance ``index`` with given coefficients (nothing identified): its gap figures, as ``_run_one``'s."""
+    spec, coefs, index = task
+    trial = trial_for(spec)
+    s = _stance_by_index(trial, index)
+    if s is None:
+        return {"gap": np.inf, "rms": np.full(7, np.nan), "duration_error_s": np.nan, "net_work_j": np.nan,
+                "end_reason": "stance lost when re-measured"}
+    return simulate_held_out(spec, coefs, trial, s, _CONTEXT["scales"])
+
+
 class HeldOutEvaluator:
     """Runs leave-one-stance-out forward simulations of models on one recording, on all cores.
 
@@ -359,16 +378,32 @@ class HeldOutEvaluator:
 
         Per coefficient set, per stance: ``gap``, ``samples`` and ``terms`` (:func:`_gap_of`; None if it failed).
         """
+        return self.stance_residuals_of([(spec, c) for c in coef_sets], indices)
+
+    def stance_residuals_of(self, models: list[tuple[ModelSpec, np.ndarray]],
+                            indices: tuple[int, ...] | None = None) -> list[list[dict]]:
+        """:meth:`stance_residuals` of several ``(spec, coefficients)`` pairs, in one pool map."""
         stances = [s.index for s in self.trial.stances if indices is None or s.index in indices]
         n = len(stances)
-        tasks = [(spec, c, i) for c in coef_sets for i in stances]
+        tasks = [(spec, c, i) for spec, c in models for i in stances]
         pool = self._pool
         out = list(pool.map(_in_sample_one, tasks)) if pool else [_in_sample_one(t) for t in tasks]
-        return [out[k * n:(k + 1) * n] for k in range(len(coef_sets))]
+        return [out[k * n:(k + 1) * n] for k in range(len(models))]
+
+    def held_out_of(self, spec: ModelSpec, coefs: np.ndarray, indices: tuple[int, ...]) -> list[dict]:
+        """Gap figures (as :meth:`run` keeps them) of ``spec`` with ``coefs`` on the stances ``indices``, in order."""
+        tasks = [(spec, coefs, i) for i in indices]
+        return list(self._pool.map(_figures_one, tasks)) if self._pool else [_figures_one(t) for t in tasks]
 
     def run(self, spec: ModelSpec, effects: list) -> list[HeldOutRuns]:
-        """Held-out runs of ``spec`` with each of ``effects`` added (None = ``spec`` itself)."""
+        """Held-out runs of ``spec`` with each of ``effects`` added (None = ``spec`` itself); leave-one-out, or with
+        :data:`SURFACE_FOLDS` and the surface in ``spec`` on folds with each model's surface shot."""
         import time
+
+        if SURFACE_FOLDS and spec.has("surface_compliance"):
+            from hop_impedance.discovery import surface_shot
+
+            return [surface_shot.held_out_runs(self, spec, e, SURFACE_FOLDS) for e in effects]
 
         idx = [s.index for s in self.trial.stances]
         tasks = [(spec, e, i) for e in effects for i in idx]
