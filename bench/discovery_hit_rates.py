@@ -35,9 +35,9 @@ runs one Dask task per case and seed through :func:`hop_impedance.batch.runner.c
 with one process per task; the lines of each run print in the serial order once all are back.
 ``--gate-folds K [--gate-search levenberg-marquardt] [--gate-converge]``: the stiffness gate's session-11 option
 (held out over K folds) and its search; ``--screen-uncorrected``: session 13's option (the held-out test before the
-gate at alpha, ``stiffness_gate.SCREEN_CORRECTED = False``); ``--surface-folds K``: session 15's option (each model's
-surface law shot on K held-out folds once the surface is in the model, ``forward_selection.SURFACE_FOLDS``); set in
-this process, so only without ``--scheduler``.
+gate at alpha, ``stiffness_gate.SCREEN_CORRECTED = False``); ``--surface-folds K``: ``forward_selection.SURFACE_FOLDS``
+(each model's surface law shot on K held-out folds once the surface is in the model; 2 is the default since session
+15, 0 the leave-one-out of sessions 1-14); set in this process, so only without ``--scheduler``.
 """
 
 from __future__ import annotations
@@ -138,7 +138,7 @@ def main() -> None:
     ap.add_argument("--gate-converge", action="store_true", help="stiffness_gate.TO_CONVERGENCE")
     ap.add_argument("--json-dir", default="", help="also write each run's discover document to DIR/<case>_<seed>.json")
     ap.add_argument("--surface-folds", type=int, default=None,
-                    help="forward_selection.SURFACE_FOLDS (session 15's option: each model's surface shot on K folds)")
+                    help="forward_selection.SURFACE_FOLDS (each model's surface shot on K folds; default 2, 0: sessions 1-14)")
     ap.add_argument("--screen-uncorrected", action="store_true",
                     help="stiffness_gate.SCREEN_CORRECTED = False (session 13's option: the held-out test at alpha)")
     args = ap.parse_args()

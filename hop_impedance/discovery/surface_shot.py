@@ -10,7 +10,7 @@ the toe-fit law absorbs part of what the push-off explains (session 13, ``bench/
 measured on the bench that with each model's own surface law chosen through the simulation, held out on 2 folds,
 the push-off passes on 1501 (+26.8 %, p 0.0035 < 0.05/7), not on 1001.
 
-Rule (:data:`hop_impedance.discovery.forward_selection.SURFACE_FOLDS` > 0; option, NOT the default)
+Rule (:data:`hop_impedance.discovery.forward_selection.SURFACE_FOLDS` > 0; 2 is the default since session 15)
 ----------------------------------------------------------------------------------
 In a round whose current model already has the surface, every model (the current one and each candidate) is
 judged on held-out folds instead of leave-one-out: per fold (``stiffness_gate.fold_indices``) its joint law is
@@ -23,10 +23,10 @@ model is judged the same way (``workflow._runs_reusable``): its leave-one-out ru
 against candidates with shot surfaces let every candidate gain from the search alone (first build: a 0 N plate
 offset shrank the gap of ``active_push_off+surface_compliance_1001`` by 24 %, p 0.0084).
 
-Why not the default (docs/discovery.md, "Session 15"): a candidate that adds nothing ties with the current model
+Measured (docs/discovery.md, "Session 15"): the outside files 4/8 exact (1401 and 1501 added), 0/6 false; no false
+name on our simulator's surface recordings. Known weakness: a candidate that adds nothing ties with the current model
 where the simulated stances take off, but where the gap is flat in the factors (stances that never take off) its
-search, started at the current model's point, wanders off it; such asymmetries name false effects, and the nulls
-that would show them (recordings with a surface and nothing else) were not measured in enough number.
+search, started at the current model's point, can wander off it.
 """
 
 from __future__ import annotations

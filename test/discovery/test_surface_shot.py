@@ -1,4 +1,4 @@
-"""The surface law through the simulation (session 15's option ``forward_selection.SURFACE_FOLDS``,
+"""The surface law through the simulation (session 15, ``forward_selection.SURFACE_FOLDS``,
 :mod:`hop_impedance.discovery.surface_shot`).
 
 Checked on our simulator's soft ground (seed 001's soft law, ``k = 7.5e4 N/m^1.4``, ``n = 1.4``, 68.4 N s/m): the
