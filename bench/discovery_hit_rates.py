@@ -35,7 +35,9 @@ runs one Dask task per case and seed through :func:`hop_impedance.batch.runner.c
 with one process per task; the lines of each run print in the serial order once all are back.
 ``--gate-folds K [--gate-search levenberg-marquardt] [--gate-converge]``: the stiffness gate's session-11 option
 (held out over K folds) and its search; ``--screen-uncorrected``: session 13's option (the held-out test before the
-gate at alpha, ``stiffness_gate.SCREEN_CORRECTED = False``); set in this process, so only without ``--scheduler``.
+gate at alpha, ``stiffness_gate.SCREEN_CORRECTED = False``); ``--surface-folds K``: ``forward_selection.SURFACE_FOLDS``
+(each model's surface law shot on K held-out folds once the surface is in the model; 2 is the default since session
+15, 0 the leave-one-out of sessions 1-14); set in this process, so only without ``--scheduler``.
 """
 
 from __future__ import annotations
@@ -138,6 +140,8 @@ def main() -> None:
     ap.add_argument("--gate-search", choices=("nelder-mead", "levenberg-marquardt"), default=None)
     ap.add_argument("--gate-converge", action="store_true", help="stiffness_gate.TO_CONVERGENCE")
     ap.add_argument("--json-dir", default="", help="also write each run's discover document to DIR/<case>_<seed>.json")
+    ap.add_argument("--surface-folds", type=int, default=None,
+                    help="forward_selection.SURFACE_FOLDS (each model's surface shot on K folds; default 2, 0: sessions 1-14)")
     ap.add_argument("--screen-uncorrected", action="store_true",
                     help="stiffness_gate.SCREEN_CORRECTED = False (session 13's option: the held-out test at alpha)")
     args = ap.parse_args()
@@ -171,6 +175,12 @@ def main() -> None:
 
 def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """The stiffness gate's options, set in this process (a Dask worker would not see them)."""
+    if args.surface_folds is not None:
+        if args.scheduler:
+            ap.error("--surface-folds is set in this process: run without --scheduler")
+        from hop_impedance.discovery import forward_selection
+
+        forward_selection.SURFACE_FOLDS = args.surface_folds
     if args.gate_folds is None and args.gate_search is None and not args.gate_converge and not args.screen_uncorrected:
         return
     if args.scheduler:

@@ -14,14 +14,23 @@ show about no duration error. Per recording this prints, over its stances (mean 
    the same with the simulation's own end (force zero) instead of the detector's level, and the term as it was
    before session 14 (the simulation sampled at the measured times only: 0 for any stance simulated too long).
 
+The true law's ``M_td``: ``--touchdown-moment`` (``discovery_truth_gap.TOUCHDOWN_MOMENTS``; default ``estimated``,
+from the stance's ID moments against the identification's reference, as for a candidate; session 14 used the
+truth's moment at the true contact, ``contact``, which starts the law 1-2 ms of flexion too low). ``--strict SEEDS``:
+strict nulls of the second generator instead of the outside files (``--own-body``: its own segment parameters given
+to the analysis); ``--only-simulator``: our simulator's noise-free null alone.
+
+Session 15's touchdown-state option, measured and not adopted: ``--kink-fit`` (``measurement.TOUCHDOWN_KINK_FIT``: a
+fit per marker coordinate with a velocity jump at the touchdown, ``--kink-window``/``--kink-degree``).
 Session 14's touchdown-state options, measured and not adopted: ``--flight-touchdown`` (``measurement.
 TOUCHDOWN_FROM_FLIGHT``: the state extrapolated from the flight's markers, a polynomial of ``--fit-degree`` over the
 last ``--fit-window`` s) and ``--touchdown-cutoff HZ`` (``measurement.TOUCHDOWN_CUTOFF_HZ``: the low-passed
 kinematics at another cut-off for the state only).
 
 Usage: .venv/bin/python bench/discovery_stance_edges.py [FILE.mcap ...] [--simulator] [--freq 2.2] [--seed 1]
-[--flight-touchdown [--fit-window 0.08] [--fit-degree 2]] [--touchdown-cutoff HZ] (default: every outside file of
-../shared/foreign; ``--simulator``: also a noise-free null of our simulator).
+[--flight-touchdown [--fit-window 0.08] [--fit-degree 2]] [--touchdown-cutoff HZ] [--touchdown-moment estimated]
+[--strict 3,15 [--own-body]] [--only-simulator] [--kink-fit [--kink-window 0.1,0.1] [--kink-degree 3]] (default: every
+outside file of ../shared/foreign; ``--simulator``: also a noise-free null of our simulator).
 """
 
 from __future__ import annotations
@@ -33,10 +42,12 @@ from pathlib import Path
 
 import numpy as np
 
+from hop_impedance.biomech.joint_angles import joint_angles, joint_rates
 from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery import measurement
+from hop_impedance.discovery.identify import touchdown_moments
 from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
-from hop_impedance.discovery.model import FittedLaw
+from hop_impedance.discovery.model import ModelSpec
 from hop_impedance.io.recording_io import load_recording
 from hop_impedance.simulation.ground import SURFACES
 from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, Effects
@@ -44,7 +55,13 @@ from hop_impedance.simulation.sensors import SensorConfig, noise_free
 from hop_impedance.simulation.stance_set import RIGID_NO_BOUNCE, _stance_set_law, simulate_stance_set_recording
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from discovery_truth_gap import STRICT_GROUND, truth_law  # noqa: E402  (a sibling bench script)
+from discovery_truth_gap import (  # noqa: E402  (a sibling bench script)
+    STRICT_GROUND,
+    TOUCHDOWN_MOMENTS,
+    fitted_law,
+    true_touchdown_moment,
+    truth_law,
+)
 
 
 def ms(x) -> str:
@@ -72,7 +89,40 @@ def report(name: str, trial: MeasuredTrial, contacts: list[tuple[float, float]],
           f"{ms(own_end)}; the term before session 14 {ms(old)}", flush=True)
 
 
-def outside(path: Path) -> None:
+def joint_state(trial: MeasuredTrial) -> tuple[np.ndarray, np.ndarray]:
+    """Per stance, the touchdown state's joint angles and rates (rad, rad/s; ours: flexion positive), (n, 3) each."""
+    q = np.array([s.touchdown.g[2:] for s in trial.stances])
+    qd = np.array([s.touchdown.gd[2:] for s in trial.stances])
+    return joint_angles(q, trial.chain.alpha_rad), joint_rates(qd)
+
+
+def state_line(label: str, d_rho: np.ndarray, d_omega: np.ndarray) -> None:
+    """Print the per-joint mean and SD over stances of angle (mrad) and rate (rad/s) differences."""
+    print(f"  touchdown state, {label}: angles (ankle, knee, hip) {np.round(1e3 * d_rho.mean(0), 1).tolist()} mrad "
+          f"(SD {np.round(1e3 * d_rho.std(0), 1).tolist()}), rates {np.round(d_omega.mean(0), 2).tolist()} rad/s "
+          f"(SD {np.round(d_omega.std(0), 2).tolist()})")
+
+
+def truth_state(truth: dict, rec, trial: MeasuredTrial) -> tuple[np.ndarray, np.ndarray]:
+    """Per stance, the outside truth's joint angles and flexion rates at the stance's first plate sample
+    (``stance_truth``, 5 ms rows, interpolated), in our convention. The truth's ``rho_t`` falls with flexion:
+    ``rho_t1 = alpha_t - (q1 - q2)``, ``rho_t2 = pi - (q3 - q2)``, ``rho_t3 = pi - (q3 - q4)``; its ``w`` is our rate."""
+    rows = np.asarray(truth["stance_truth"]["rows"], float)
+    cols = truth["stance_truth"]["columns"]
+    rho, omega = [], []
+    for s in trial.stances:
+        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
+        r = rows[rows[:, cols.index("hop")] == hop["hop"]]
+        t = (rec.start_ns - truth["recording"]["epoch_start_ns"]) * 1e-9 + s.touchdown_s + float(s.t_s[0])
+        rho_t = np.array([np.interp(t, r[:, 0], r[:, cols.index(f"rho_{j}")]) for j in ("ankle", "knee", "hip")])
+        # our rho1 = q1 - q2 + alpha: from the truth's, q1 - q2 = alpha_t - rho_t1
+        rho.append(np.array([truth["subject"]["alpha"] - rho_t[0] + trial.chain.alpha_rad, 2 * np.pi - rho_t[1],
+                             2 * np.pi - rho_t[2]]))
+        omega.append([np.interp(t, r[:, 0], r[:, cols.index(f"w_{j}")]) for j in ("ankle", "knee", "hip")])
+    return np.array(rho), np.array(omega)
+
+
+def outside(path: Path, touchdown_moment: str = TOUCHDOWN_MOMENTS[0]) -> None:
     rec = load_recording(path)
     truth = json.loads(path.with_suffix(".truth.json").read_text())
     latency = 0.0
@@ -84,12 +134,15 @@ def outside(path: Path) -> None:
         hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
         contacts.append(((hop["t_td_ns"] - rec.start_ns) * 1e-9, (hop["t_to_ns"] - rec.start_ns) * 1e-9))
         spec, coefs = truth_law(hop)
-        laws.append(FittedLaw(spec, coefs, np.asarray(hop["law"]["M_td"], float)))
+        m_td = true_touchdown_moment(touchdown_moment, truth, hop, s, rec.start_ns, spec, coefs)
+        laws.append(fitted_law(touchdown_moment, spec, coefs, m_td, s))
         grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else STRICT_GROUND)
     report(path.stem, trial, contacts, laws, grounds)
+    (rho, omega), (rho_t, omega_t) = joint_state(trial), truth_state(truth, rec, trial)
+    state_line("minus the truth's at the first sample", rho - rho_t, omega - omega_t)
 
 
-def simulator(freq_hz: float, seed: int) -> None:
+def simulator(freq_hz: float, seed: int, touchdown_moment: str = TOUCHDOWN_MOMENTS[0]) -> None:
     effects = Effects(angle_dependent_stiffness=False, damping=False, push_off=False)
     sensors = noise_free(SensorConfig())
     rec, truth = simulate_stance_set_recording(freq_hz, ("rigid",), 8, seed, effects, sensors)
@@ -101,29 +154,79 @@ def simulator(freq_hz: float, seed: int) -> None:
         st = min(truth["stances"], key=lambda x: abs(x["touchdown_s"] - t0 - s.touchdown_s))
         contacts.append((st["touchdown_s"] - t0, st["takeoff_s"] - t0))
     n = len(trial.stances)
-    report(f"our simulator, noise-free null, {freq_hz} Hz, seed {seed}", trial, contacts, [law] * n, [RIGID_NO_BOUNCE] * n)
+    laws = [law] * n  # its moment is 0 at the contact, and about 0 at the first sample (the impact is instant)
+    if touchdown_moment == "estimated":
+        k0 = np.array(law.parts[0].k0, float)[:, None]
+        laws = [fitted_law("estimated", ModelSpec(), k0, touchdown_moments(ModelSpec(), k0, s), s) for s in trial.stances]
+    report(f"our simulator, noise-free null, {freq_hz} Hz, seed {seed}", trial, contacts, laws, [RIGID_NO_BOUNCE] * n)
+    kink = measurement.TOUCHDOWN_KINK_FIT
+    measurement.TOUCHDOWN_KINK_FIT = not kink
+    other = measure_trial(rec)
+    measurement.TOUCHDOWN_KINK_FIT = kink
+    (rho, omega), (rho_o, omega_o) = joint_state(trial), joint_state(other)
+    state_line(f"{'kinked fit' if kink else 'default'} minus {'default' if kink else 'kinked fit'}", rho - rho_o,
+               omega - omega_o)
+    print(f"  joint rates at the touchdown, default {np.round((omega_o if kink else omega).mean(0), 2).tolist()}, kinked "
+          f"fit (the stance side) {np.round((omega if kink else omega_o).mean(0), 2).tolist()} rad/s")
+
+
+def strict(seed: int, hops: int, touchdown_moment: str, own_body: bool) -> None:
+    """A strict null of the second generator (its lossless 1e7 |y|^1.5 ground, Winter's body; ``own_body``: its own
+    segment parameters given to the analysis, else the table's)."""
+    from discovery_body_nuisance import generator_overrides
+
+    from hop_impedance.biomech.analysis import AnalysisOptions
+    from hop_impedance.validation.strict_generator import StrictConfig, strict_recording
+
+    cfg = StrictConfig(seed=seed, hops=hops)
+    rec, truth = strict_recording(cfg)
+    trial = measure_trial(rec, options=AnalysisOptions(overrides=generator_overrides(cfg)) if own_body else None)
+    hops_ = [min(truth["per_hop"], key=lambda h: abs(h["t_td"] - s.touchdown_s)) for s in trial.stances]
+    contacts = [(h["t_td"], h["t_to"]) for h in hops_]
+    laws = []
+    for s, h in zip(trial.stances, hops_):
+        k0 = np.array(h["k0"], float)[:, None]
+        m_td = touchdown_moments(ModelSpec(), k0, s) if touchdown_moment == "estimated" else np.asarray(h["M_td"], float)
+        laws.append(fitted_law(touchdown_moment, ModelSpec(), k0, m_td, s))
+    report(f"second generator, strict null seed {seed} ({'its own body' if own_body else 'table body'})", trial, contacts,
+           laws, [STRICT_GROUND] * len(laws))
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("files", nargs="*")
     ap.add_argument("--simulator", action="store_true", help="also a noise-free null of our simulator")
+    ap.add_argument("--only-simulator", action="store_true", help="that null only (no outside file)")
+    ap.add_argument("--strict", default="", help="comma-separated strict null seeds of the second generator (no outside file)")
+    ap.add_argument("--own-body", action="store_true", help="the second generator's own segment parameters")
     ap.add_argument("--freq", type=float, default=2.2)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--flight-touchdown", action="store_true", help="the touchdown state extrapolated from the flight")
     ap.add_argument("--fit-window", type=float, default=measurement.TOUCHDOWN_FIT_S)
     ap.add_argument("--fit-degree", type=int, default=measurement.TOUCHDOWN_FIT_DEGREE)
+    ap.add_argument("--touchdown-moment", choices=TOUCHDOWN_MOMENTS, default=TOUCHDOWN_MOMENTS[0],
+                    help="the true law's M_td (discovery_truth_gap.TOUCHDOWN_MOMENTS; session 14: contact)")
     ap.add_argument("--touchdown-cutoff", type=float, default=None, help="cut-off (Hz) of the touchdown state's kinematics")
+    ap.add_argument("--kink-fit", action="store_true", help="the touchdown state fitted with a kink (session 15)")
+    ap.add_argument("--kink-window", default=",".join(map(str, measurement.TOUCHDOWN_KINK_WINDOW_S)),
+                    help="seconds before,after the touchdown")
+    ap.add_argument("--kink-degree", type=int, default=measurement.TOUCHDOWN_KINK_DEGREE)
     args = ap.parse_args()
+    measurement.TOUCHDOWN_KINK_FIT = args.kink_fit
+    measurement.TOUCHDOWN_KINK_WINDOW_S = tuple(float(x) for x in args.kink_window.split(","))
+    measurement.TOUCHDOWN_KINK_DEGREE = args.kink_degree
     measurement.TOUCHDOWN_FROM_FLIGHT = args.flight_touchdown
     measurement.TOUCHDOWN_FIT_S, measurement.TOUCHDOWN_FIT_DEGREE = args.fit_window, args.fit_degree
     measurement.TOUCHDOWN_CUTOFF_HZ = args.touchdown_cutoff
     fs.TWO_SIDED_DURATION = True  # the simulation sampled past the measured end (both definitions are printed)
-    files = [Path(f) for f in args.files] or sorted(Path("../shared/foreign").glob("*.mcap"))
+    outside_files = [] if args.only_simulator or args.strict else sorted(Path("../shared/foreign").glob("*.mcap"))
+    files = [Path(f) for f in args.files] or outside_files
     for path in files:
-        outside(path)
-    if args.simulator:
-        simulator(args.freq, args.seed)
+        outside(path, args.touchdown_moment)
+    for seed in [int(x) for x in args.strict.split(",") if x]:
+        strict(seed, 8, args.touchdown_moment, args.own_body)
+    if args.simulator or args.only_simulator:
+        simulator(args.freq, args.seed, args.touchdown_moment)
 
 
 if __name__ == "__main__":

@@ -10,7 +10,12 @@ and with ``--discover`` the held-out final gap of ``hop-impedance discover`` and
 within 1.2x). A truth gap above the baseline's means our simulator and body model cannot show that effect by
 forward simulation, whatever the selection does (measured on ``rate_dependent_stiffness_1301``).
 
-Usage: .venv/bin/python bench/discovery_truth_gap.py [DIR] [CASE ...] [--discover]
+The true law's ``M_td`` per stance: ``--touchdown-moment`` (:data:`TOUCHDOWN_MOMENTS`; default ``estimated``, as a
+candidate's; sessions 2-14 used the truth's at the contact). ``--two-sided``: the gap with
+``forward_selection.TWO_SIDED_DURATION``.
+
+Usage: .venv/bin/python bench/discovery_truth_gap.py [DIR] [CASE ...] [--discover] [--touchdown-moment estimated]
+[--two-sided]
 """
 
 from __future__ import annotations
@@ -22,8 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
+from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery.forward import ground_of
-from hop_impedance.discovery.forward_selection import law_gaps
+from hop_impedance.discovery.forward_selection import identification_reference, law_gaps
 from hop_impedance.discovery.identify import identify, touchdown_moments
 from hop_impedance.discovery.measurement import measure_trial
 from hop_impedance.discovery.model import FittedLaw, ModelSpec
@@ -64,12 +70,49 @@ def truth_law(hop: dict) -> tuple[ModelSpec, np.ndarray]:
     return spec, np.array(cols, float).T
 
 
+#: How the true law's touchdown moment ``M_td`` is set (``--touchdown-moment``; session 15). ``estimated`` (the
+#: default): from the stance's ID moments with the truth's coefficients and against the identification's reference,
+#: exactly as for a candidate (``identify.touchdown_moments``, ``forward_selection.identification_reference``).
+#: ``first-sample``: the truth's moment at the stance's first plate sample (stance_truth, interpolated), where the
+#: simulation starts. ``contact`` (sessions 2-14): the truth's ``M_td``, the moment at the true contact. The
+#: simulation starts at the first plate sample after the *detected* touchdown, 1-2 ms after the true contact on the
+#: outside rigid grounds, with the law's reference angles read there, so ``contact`` starts every joint
+#: K * (its flexion in those 1-2 ms) too low (ankle ~190 N m/rad * 12.6 rad/s * 1.6 ms = 4 N m): most of session 14's
+#: "+4.8..+10.8 ms late" on those files.
+TOUCHDOWN_MOMENTS = ("estimated", "first-sample", "contact")
+
+
+def true_touchdown_moment(how: str, truth: dict, hop: dict, s, start_ns: int, spec=None, coefs=None) -> np.ndarray:
+    """``M_td`` (N m, shape (3,)) of one hop's true law for the simulation of stance ``s`` (:data:`TOUCHDOWN_MOMENTS`).
+
+    ``start_ns``: the recording's first stamp (its clock against the truth's epoch).
+    """
+    if how == "contact":
+        return np.asarray(hop["law"]["M_td"], float)
+    if how == "estimated":
+        return touchdown_moments(spec, coefs, s)
+    rows = np.asarray(truth["stance_truth"]["rows"], float)
+    cols = truth["stance_truth"]["columns"]
+    r = rows[rows[:, cols.index("hop")] == hop["hop"]]
+    t = (start_ns - truth["recording"]["epoch_start_ns"]) * 1e-9 + s.touchdown_s + float(s.t_s[0])
+    return np.array([np.interp(t, r[:, cols.index("t_s")], r[:, cols.index(f"M_{j}")]) for j in ("ankle", "knee", "hip")])
+
+
+def fitted_law(how: str, spec, coefs, m_td, s) -> FittedLaw:
+    """The law with ``M_td``; with ``estimated`` also the identification's reference (as a candidate has it,
+    ``forward_selection.identification_reference``), else the simulation's touchdown state's."""
+    return FittedLaw(spec, coefs, m_td, identification_reference(s) if how == "estimated" else None)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folder", nargs="?", default="../shared/foreign")
     ap.add_argument("cases", nargs="*")
     ap.add_argument("--discover", action="store_true", help="also run discover and print final gap / truth gap")
+    ap.add_argument("--touchdown-moment", choices=TOUCHDOWN_MOMENTS, default=TOUCHDOWN_MOMENTS[0])
+    ap.add_argument("--two-sided", action="store_true", help="the gap with forward_selection.TWO_SIDED_DURATION")
     args = ap.parse_args()
+    fs.TWO_SIDED_DURATION = args.two_sided
     folder = Path(args.folder)
     cases = args.cases or sorted(p.name[:-5] for p in folder.glob("*.mcap"))
     for case in cases:
@@ -81,16 +124,17 @@ def main() -> None:
         trial = measure_trial(rec, marker_latency_s=latency)
         laws, grounds = [], []
         for s in trial.stances:
-            hop = min(truth["per_hop"], key=lambda h: abs(h["t_td"] - s.touchdown_s))
+            hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
             spec, coefs = truth_law(hop)
-            laws.append(FittedLaw(spec, coefs, np.asarray(hop["law"]["M_td"], float)))
+            m_td = true_touchdown_moment(args.touchdown_moment, truth, hop, s, rec.start_ns, spec, coefs)
+            laws.append(fitted_law(args.touchdown_moment, spec, coefs, m_td, s))
             grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else STRICT_GROUND)
         offset = 0.0
         if "force_plate_offset" in truth["effects"]:  # "constant +25.5 N added to force.z"
             offset = float(truth["effect_details"]["force_plate_offset"].split()[1])
         g_truth = law_gaps(trial, laws, grounds, offset)
         base, c0 = identify(ModelSpec(), trial, trial.stances)
-        g_base = law_gaps(trial, [FittedLaw(base, c0, touchdown_moments(base, c0, s)) for s in trial.stances],
+        g_base = law_gaps(trial, [fitted_law("estimated", base, c0, touchdown_moments(base, c0, s), s) for s in trial.stances],
                           [ground_of(base, s) for s in trial.stances])
         line = (f"{case}: truth-law gap {np.mean(g_truth):.4f} (finite {np.isfinite(g_truth).sum()}/{g_truth.size}), "
                 f"baseline in-sample gap {np.mean(g_base):.4f}")

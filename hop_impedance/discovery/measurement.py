@@ -38,7 +38,8 @@ MIN_STANCE_SAMPLES = 40
 FLIGHT_MARGIN_S = 0.03
 #: Session 14's options for the touchdown state, measured and not adopted (docs/discovery.md, "Session 14";
 #: ``bench/discovery_stance_edges.py``). The default reads it from the low-passed kinematics, whose filter runs across
-#: the impact: the TRUE law simulated from it takes off 5-11 ms late on rigid grounds. TOUCHDOWN_FROM_FLIGHT: the
+#: the impact (session 14 blamed it for the TRUE law taking off 5-11 ms late on rigid grounds; session 15: mostly the
+#: bench's ``M_td``, see :data:`TOUCHDOWN_KINK_FIT`). TOUCHDOWN_FROM_FLIGHT: the
 #: state extrapolated from the flight's markers (:func:`_flight_touchdown_state`; a quadratic over the last
 #: TOUCHDOWN_FIT_S): that error's mean per file is -8.3..+7.4 ms and per stance it spreads to -21..+23 ms (longer
 #: windows make stances collapse). TOUCHDOWN_CUTOFF_HZ: the state's kinematics at another cut-off (None: the
@@ -49,6 +50,18 @@ TOUCHDOWN_FIT_DEGREE = 2
 TOUCHDOWN_CUTOFF_HZ: float | None = None
 #: Fewest flight marker samples for that fit; with fewer the low-passed kinematics at the touchdown are used.
 TOUCHDOWN_FIT_MIN_SAMPLES = 4
+#: Session 15's option for the touchdown state, measured and not adopted (docs/discovery.md, "Session 15";
+#: ``bench/discovery_stance_edges.py --kink-fit``): per marker coordinate a least-squares fit over the marker samples
+#: within TOUCHDOWN_KINK_WINDOW_S (before, after) the detected touchdown (not past the previous take-off's flight margin
+#: nor the take-off) of a polynomial of TOUCHDOWN_KINK_DEGREE plus ``b max(t - t_td, 0)``: positions continuous, the
+#: velocity free to jump at the touchdown (an impact), so no filter runs across it. Positions at the stance's first
+#: plate sample, rates from the stance side. Why: where the joint rates jump at the impact (our simulator: they turn fast
+#: from the first millisecond) the 12 Hz filter leaves the ankle angle 34.8 mrad off at the touchdown, and the true law,
+#: with ``M_td`` estimated as for a candidate, ends 2.45 ms early (+0.96 ms with this fit). Why not adopted: with 1 mm
+#: marker noise (outside files, the second generator) the fit's angles and rates are noisier than the filter's.
+TOUCHDOWN_KINK_FIT = False
+TOUCHDOWN_KINK_WINDOW_S = (0.1, 0.1)
+TOUCHDOWN_KINK_DEGREE = 3
 
 
 @dataclass
@@ -265,6 +278,9 @@ def _measured_stance(s, sel, force: tuple, kin, chain: Chain, prev_takeoff_s: fl
     i0 = idx[0]
     t_m, filled, kin_td = markers
     state = _flight_touchdown_state(t_m, filled, float(t_f[i0]), prev_takeoff_s) if TOUCHDOWN_FROM_FLIGHT else None
+    if TOUCHDOWN_KINK_FIT:
+        state = _kinked_touchdown_state(t_m, filled, (float(s.touchdown_s), float(t_f[i0])), prev_takeoff_s,
+                                        float(s.takeoff_s))
     if state is None:
         state = _filtered_touchdown_state(t_f, kin_td, chain, i0)
     g0, gd0 = state
@@ -283,7 +299,10 @@ def _filtered_touchdown_state(t_f, kin, chain: Chain, i0: int) -> tuple[np.ndarr
     The COM velocity from the marker COM; the toe z velocity = COM's minus the angles' share. The low-pass runs
     across the impact, so the velocities mix flight and stance (session 14, a noise-free null of our simulator:
     toe z velocity -0.36..-0.41 m/s against the flight's -0.82..-0.93, joint rates already those of the stance),
-    and the true law simulated from it takes off 5-11 ms late on rigid grounds (``bench/discovery_stance_edges.py``).
+    and the touchdown angles carry the spread of an impact (session 15, that null: ankle 34.8 mrad above the kinked
+    fit's). With ``M_td`` estimated as for a candidate the true law then ends 2.45 ms early there, and -0.2..+1.9 ms from
+    the measured take-off on the outside rigid nulls (``bench/discovery_stance_edges.py``; session 14's 5-11 ms late
+    were mostly that bench's ``M_td``).
     """
     q0, qd0 = kin.q[i0], kin.qd[i0]
     com_z = np.einsum("s,ns->n", chain.mass_kg, kin.com_xz[max(i0 - 2, 0): i0 + 3, :, 1]) / chain.total_mass_kg
@@ -313,6 +332,35 @@ def _flight_touchdown_state(t_m: np.ndarray, markers_xz: np.ndarray, at_s: float
     q = segment_angles_from_points(at)
     qd = (q[2] - q[0]) / (2 * h)
     return np.r_[at[1, 0, 0], 0.0, q[1]], np.r_[0.0, coef[-2].reshape(-1, 2)[0, 1], qd]
+
+
+def _kinked_touchdown_state(t_m: np.ndarray, markers_xz: np.ndarray, times: tuple[float, float], prev_takeoff_s: float,
+                            takeoff_s: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(g, gd)`` at the stance's first plate sample from a fit with a kink at the detected touchdown (option
+    :data:`TOUCHDOWN_KINK_FIT`). ``times``: the detected touchdown and that sample (s). None with fewer complete marker
+    samples in the window than the fit has coefficients plus two.
+    """
+    td_s, at_s = times
+    before, after = TOUCHDOWN_KINK_WINDOW_S
+    sel = (t_m > max(prev_takeoff_s + FLIGHT_MARGIN_S, td_s - before)) & (t_m < min(takeoff_s, td_s + after))
+    pts = markers_xz[sel][:, [MARKER_NAMES.index(p) for p in POINT_NAMES]]
+    ok = np.all(np.isfinite(pts), axis=(1, 2))
+    deg = TOUCHDOWN_KINK_DEGREE
+    if ok.sum() < deg + 4:
+        return None
+
+    def basis(tau: np.ndarray, order: int) -> np.ndarray:
+        """Columns ``tau^0..tau^deg, max(tau, 0)`` (order 0) or their time derivatives on the stance side (order 1)."""
+        if order == 0:
+            return np.column_stack([tau**k for k in range(deg + 1)] + [np.maximum(tau, 0.0)])
+        return np.column_stack([np.zeros_like(tau)] + [k * tau ** (k - 1) for k in range(1, deg + 1)] + [np.ones_like(tau)])
+
+    coef, *_ = np.linalg.lstsq(basis(t_m[sel][ok] - td_s, 0), pts[ok].reshape(int(ok.sum()), -1), rcond=None)
+    tau = np.array([at_s - td_s])
+    pos, vel = (basis(tau, 0) @ coef).reshape(-1, 2), (basis(tau, 1) @ coef).reshape(-1, 2)
+    h = 1e-5
+    q = segment_angles_from_points(np.stack([pos - h * vel, pos, pos + h * vel]))
+    return np.r_[pos[0, 0], 0.0, q[1]], np.r_[0.0, vel[0, 1], (q[2] - q[0]) / (2 * h)]
 
 
 def weight_n(trial: MeasuredTrial) -> float:

@@ -51,7 +51,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from hop_impedance.simulation.impedance_laws import ImpedanceLaw
+from hop_impedance.simulation.impedance_laws import ImpedanceLaw, TouchdownReference
 
 #: Effect names, exactly as the issue spells them.
 EFFECT_NAMES: tuple[str, ...] = (
@@ -253,11 +253,18 @@ class FittedLaw(ImpedanceLaw):
         Per joint (ankle, knee, hip), in :func:`feature_names` order (SI).
     touchdown_moment_nm : ndarray, shape (3,)
         ``M_td`` of the stance simulated (N m; nuisance, see ``identify.touchdown_moments``).
+    reference : TouchdownReference or None
+        ``rho0``/``omega0`` of the regressors (:func:`stance_features` takes them from the measured stance's first
+        sample, and ``M_td`` is estimated against them); None: the simulator's, read from the state the simulation
+        starts from. Session 15: the law keeps the identification's reference when the simulation starts from
+        another touchdown state (``measurement.TOUCHDOWN_STATE``); with the filtered kinematics' state both are the
+        same numbers.
     """
 
     spec: ModelSpec
     coefficients: np.ndarray = field(default_factory=lambda: np.zeros((3, 1)))
     touchdown_moment_nm: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    reference: TouchdownReference | None = None
 
     #: ``S`` and ``S_speed`` per joint, then ``int g(t) dE_k`` per term of :data:`ELASTIC_ALL` and joint
     #: (state ``6 + 3 m + j``; integrated always, used with a tangent-form activation).
@@ -266,6 +273,7 @@ class FittedLaw(ImpedanceLaw):
     def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102
         # all three joints in one call of features() (joint axis before the regressor axis): the same
         # regressors as the fit; the simulator calls this at every step, so it is its hot path
+        ref = self.reference or ref
         dr = np.asarray(rho, float) - ref.rho0_rad
         dw = np.asarray(omega, float) - ref.omega0_rad_s
         s = np.asarray(states, float)
@@ -280,6 +288,7 @@ class FittedLaw(ImpedanceLaw):
         return self.touchdown_moment_nm + np.einsum("...jk,jk->...j", f, self.coefficients)
 
     def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102
+        ref = self.reference or ref
         w = np.asarray(omega, float)
         w0 = ref.omega0_rad_s
         rates = [(w - w0) * w, (np.abs(w) - np.abs(w0)) * w]
