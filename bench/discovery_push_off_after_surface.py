@@ -50,7 +50,7 @@ from hop_impedance.simulation.ground import SURFACES
 from hop_impedance.simulation.stance import simulate_stance
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from discovery_truth_gap import truth_law  # noqa: E402  (a sibling bench script)
+from discovery_truth_gap import fitted_law, true_touchdown_moment, truth_law  # noqa: E402  (a sibling bench script)
 
 FILES = ("active_push_off+surface_compliance_1001", "surface_compliance+active_push_off_1501")
 TERMS = ("grf", "angle_ankle", "angle_knee", "angle_hip", "moment_ankle", "moment_knee", "moment_hip",
@@ -108,13 +108,18 @@ def compare(label: str, cur: np.ndarray, cand: np.ndarray) -> None:
 
 
 def truth_rows(trial, truth: dict, scales: np.ndarray, push_scale: float) -> np.ndarray:
-    """Per stance, the 10 gap terms of the truth's per-hop law and surface (push-off amplitude times ``push_scale``)."""
+    """Per stance, the 10 gap terms of the truth's per-hop law and surface (push-off amplitude times ``push_scale``).
+
+    ``M_td`` and the reference are set as for a candidate (``discovery_truth_gap``'s default ``estimated``, session 15):
+    the truth's ``M_td`` at the true contact, which this bench used before session 16, starts the simulation 1-2 ms
+    before the first plate sample it is read at."""
     rows = []
     for s in trial.stances:
         hop = min(truth["per_hop"], key=lambda h: abs(h["t_td"] - s.touchdown_s))
         spec, coefs = truth_law(hop)
         coefs[:, feature_names(spec).index("push")] *= push_scale
-        law = FittedLaw(spec, coefs, np.asarray(hop["law"]["M_td"], float))
+        m_td = true_touchdown_moment("estimated", truth, hop, s, 0, spec, coefs)
+        law = fitted_law("estimated", spec, coefs, m_td, s)
         sim = fs.simulate_for_gap(trial.chain, law, SURFACES[hop["surface"]], s)
         rows.append(term_row(fs._gap_of(sim, s, 0.0, scales, fs.take_off_level_n(trial), samples=True)))
     return np.array(rows)
