@@ -8,6 +8,8 @@ Usage::
     nice -n 10 .venv/bin/python bench/simulator_issue17.py --law-scale seed_like   # Table 2 x SEED_LIKE_LAW_SCALE
     nice -n 19 .venv/bin/python bench/simulator_issue17.py --bell 0.9 --law-scale bell09 --surface rigid --pad 10,2
     nice -n 19 .venv/bin/python bench/simulator_issue17.py --hopper seed-like --surface rigid   # the package's preset
+    nice -n 19 .venv/bin/python bench/simulator_issue17.py --hopper seed-like --surface rigid --push-weights 1,-0.2,0.3 \
+        --law-scale-file law.json    # the preset with other push-off shares and a law from simulator_issue17_search.py --save
 
 Variants (issue 17, session 11: a mechanism for the seed's peaked force that the fit does not absorb), each
 on top of ``seed_like_options()``: ``--surface`` (the trial's and calibration's surface: seed 001's hard, default,
@@ -40,6 +42,7 @@ Takes ~2 min at load ~1 on two cores.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from dataclasses import dataclass, field
@@ -335,6 +338,18 @@ def floats(text: str, n: int | None = None) -> tuple[float, ...]:
     return values
 
 
+def write_law_scale(path: str | Path, law_scale: dict) -> None:
+    """A law scale ``{freq: (k0 factors, k1 factors)}`` (``scenarios.law_scale_at``'s table) as JSON."""
+    table = {f"{f:g}": [[float(v) for v in row] for row in np.asarray(s, float).reshape(2, 3)] for f, s in law_scale.items()}
+    Path(path).write_text(json.dumps(table, indent=1) + "\n", encoding="utf-8")
+
+
+def read_law_scale(path: str | Path) -> dict:
+    """:func:`write_law_scale`'s table back, ``{freq: ((k0 factors), (k1 factors))}``."""
+    table = json.loads(Path(path).read_text(encoding="utf-8"))
+    return {float(f): tuple(tuple(float(v) for v in row) for row in rows) for f, rows in table.items()}
+
+
 class VariantArgs(argparse.Namespace):
     """Variant flags parsed by another bench: a flag of :func:`variant_options` that bench does not define reads as not given."""
 
@@ -352,6 +367,8 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--law-scale", choices=tuple(LAW_SCALES), default="none",
                         help="the law: Table 2 (none), Table 2 x scenarios.SEED_LIKE_LAW_SCALE (seed_like) or x "
                              "BELL09_LAW_SCALE (bell09, the law calibrated for a_min 0.9)")
+    parser.add_argument("--law-scale-file", metavar="PATH",
+                        help="the law: Table 2 x the factors in PATH (JSON written by simulator_issue17_search.py --save)")
     parser.add_argument("--surface", choices=("hard", "rigid", "soft"), default="hard",
                         help="the trials' surface (default seed 001's hard; rigid: a force plate)")
     parser.add_argument("--pad", metavar="MM,N", help="a shoe pad in series: MM mm at 3 body weights, exponent N")
@@ -381,6 +398,9 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
         options["bell_activation_min"] = None if args.bell == 1.0 else args.bell
     if LAW_SCALES[args.law_scale] is not None:
         options["law_scale"] = LAW_SCALES[args.law_scale]
+    if args.law_scale_file:
+        options["law_scale"] = read_law_scale(args.law_scale_file)
+        said.append(f"law Table 2 x {args.law_scale_file}")
     if args.surface != "hard":
         said.append(f"surface {args.surface}")
     if args.pad:
@@ -421,7 +441,7 @@ def main() -> None:
     freqs = tuple(f for f in FREQS if f in floats(args.freqs))
     variant = any((args.hopper != "seed_like_options", args.bell is not None, args.law_scale != "none", args.surface != "hard",
                    args.pad, args.posture, args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS,
-                   args.push_weights,
+                   args.push_weights, args.law_scale_file,
                    args.no_seed001, args.seed != 1))
     if args.write and variant:
         parser.error("--write stores seed_like_options' table only")

@@ -49,6 +49,25 @@ def test_the_bench_variant_flags_build_the_preset():
     assert by_flags == by_preset == scenarios.seed_like_hopper_options()
 
 
+def test_a_law_file_and_the_search_rebuild_the_preset(tmp_path):
+    """Session 16: ``simulator_issue17.py --law-scale-file`` reads back what ``simulator_issue17_search.py --save`` writes
+    (the preset's law through JSON gives the preset's options), and the search's options for ``--hopper seed-like
+    --a-min 0.9 --push-weights 1,-0.2,0.3`` are the preset's with those shares (the law is what the search replaces)."""
+    import simulator_issue17 as s17
+    import simulator_issue17_search as search
+
+    law_file = tmp_path / "law.json"
+    s17.write_law_scale(law_file, scenarios.SEED_LIKE_HOPPER_LAW_SCALE)
+    parser = argparse.ArgumentParser()
+    s17.add_variant_arguments(parser)
+    by_file, _ = s17.variant_options(s17.VariantArgs(**vars(parser.parse_args(
+        ["--hopper", "seed-like", "--law-scale-file", str(law_file)]))))
+    assert by_file == scenarios.seed_like_hopper_options()
+    args = parser.parse_args(["--hopper", "seed-like", "--surface", "rigid", "--push-weights", "1,-0.2,0.3"])
+    options = search.options_for(args, scenarios.SEED_LIKE_HOPPER_BELL_MIN)
+    assert options == {**scenarios.seed_like_hopper_options(), "push_weights": (1.0, -0.2, 0.3)}
+
+
 @pytest.fixture(scope="module")
 def preset_truth(tmp_path_factory):
     """``hop-impedance simulate --hopper seed-like --surface rigid``, 2.2 Hz, 4 noise-free hops, seed 13 (9 s)."""
