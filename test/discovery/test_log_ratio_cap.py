@@ -1,4 +1,4 @@
-"""Session 16's option ``forward_selection.LOG_RATIO_CAP``: the t-tests see every per-stance log gap ratio clipped.
+"""``forward_selection.LOG_RATIO_CAP`` (session 16, the default): the t-tests see every per-stance log gap ratio clipped.
 
 The ratios are shaped like session 15's angle + offset recording of our simulator (all 8 positive, 0.38-6.1, the
 6.1 a stance the current model failed outright); the p-values are computed here by scipy, not pinned stubs.
