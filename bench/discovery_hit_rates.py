@@ -37,7 +37,11 @@ with one process per task; the lines of each run print in the serial order once 
 (held out over K folds) and its search; ``--screen-uncorrected``: session 13's option (the held-out test before the
 gate at alpha, ``stiffness_gate.SCREEN_CORRECTED = False``); ``--surface-folds K``: ``forward_selection.SURFACE_FOLDS``
 (each model's surface law shot on K held-out folds once the surface is in the model; 2 is the default since session
-15, 0 the leave-one-out of sessions 1-14); set in this process, so only without ``--scheduler``.
+15, 0 the leave-one-out of sessions 1-14); ``--log-ratio-cap X``: ``forward_selection.LOG_RATIO_CAP`` (the t-tests see
+every per-stance log gap ratio clipped to +-X, natural log units; log 10 = 2.3026 is the default since session 16,
+``inf`` the uncapped test of sessions 1-15); set in this process, so only without ``--scheduler``. Run with
+``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
+package is imported and options set on it are not the checkout's (session 16 measured the default that way).
 """
 
 from __future__ import annotations
@@ -144,6 +148,9 @@ def main() -> None:
                     help="forward_selection.SURFACE_FOLDS (each model's surface shot on K folds; default 2, 0: sessions 1-14)")
     ap.add_argument("--screen-uncorrected", action="store_true",
                     help="stiffness_gate.SCREEN_CORRECTED = False (session 13's option: the held-out test at alpha)")
+    ap.add_argument("--log-ratio-cap", type=float, default=None, metavar="X",
+                    help="forward_selection.LOG_RATIO_CAP: the t-tests see each per-stance log gap ratio clipped to +-X "
+                         "(natural log; default log 10 = 2.3026 since session 16; inf: no cap)")
     args = ap.parse_args()
     _configure_gate(ap, args)
     JSON_DIR[:] = [args.json_dir] if args.json_dir else []
@@ -181,6 +188,12 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
         from hop_impedance.discovery import forward_selection
 
         forward_selection.SURFACE_FOLDS = args.surface_folds
+    if args.log_ratio_cap is not None:
+        if args.scheduler:
+            ap.error("--log-ratio-cap is set in this process: run without --scheduler")
+        from hop_impedance.discovery import forward_selection
+
+        forward_selection.LOG_RATIO_CAP = args.log_ratio_cap
     if args.gate_folds is None and args.gate_search is None and not args.gate_converge and not args.screen_uncorrected:
         return
     if args.scheduler:
