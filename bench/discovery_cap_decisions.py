@@ -8,7 +8,8 @@ the ratios clipped to +-``--cap`` and prints the tests whose decision at ALPHA /
 If none differs in a document, the run with the cap makes the same decisions step by step (each round's inputs are
 the previous round's decisions), so its names are the document's: a replay, exact up to the ratios' rounding. A
 document with a changed decision must be re-run with the cap (a candidate that newly passes the screen reaches a
-gate never run). ``bench/discovery_capped_t.py`` is the lead's first look (round-0 screen only).
+gate never run). Session 15's ``bench/discovery_capped_t.py`` (the round-0 screen only) is folded into this bench
+(session 16): its figures are this bench's round-0 lines (angle + offset p 0.0332 -> 0.000961).
 
 Usage: .venv/bin/python bench/discovery_cap_decisions.py DOC.json [DOC.json ...] [--cap 2.3026]
 """
@@ -29,6 +30,7 @@ def main() -> None:
     ap.add_argument("docs", nargs="+")
     ap.add_argument("--cap", type=float, default=float(np.log(10.0)))
     args = ap.parse_args()
+    fs.LOG_RATIO_CAP = args.cap  # what fs.capped clips to, in this process
     docs, tests, changed, changed_docs = 0, 0, 0, 0
     for path in args.docs:
         sel = json.loads(Path(path).read_text())["selection"]
@@ -46,8 +48,7 @@ def main() -> None:
             level = fs.ALPHA / len(sel["rounds"][r])
             d = np.asarray(ratios, float)
             p_raw = fs.one_sided_t(d)
-            p_cap = fs.one_sided_t(np.clip(np.nan_to_num(d, nan=0.0, posinf=args.cap, neginf=-args.cap), -args.cap,
-                                           args.cap))
+            p_cap = fs.one_sided_t(fs.capped(d))
             if relevant and (p_raw < level) != (p_cap < level):
                 here += 1
                 print(f"{Path(path).name}: round {r} {test} {effect}: p uncapped {p_raw:.3g}, capped {p_cap:.3g} "

@@ -99,9 +99,10 @@ SURFACE_FOLDS = 2
 #: units; log 10 = 2.3026: one held-out stance counts at most as an order of magnitude). None: no cap (sessions 1-15).
 #: Why: where the current model's simulation of one held-out stance fails outright, its ``d_i`` (5-8) inflates the SD
 #: more than the mean and the t-test loses power. Session 15's sweep, our simulator's angle + offset recording
-#: (``bench/discovery_capped_t.py``): all 8 ratios of the angle law positive (0.38-6.1), p 0.033 > 0.05/8 as it is,
-#: 0.00096 capped at log 10. The reported ratios, the pooled shrink and the mean ratio that ranks the passing
-#: candidates are not capped: only the tests' input is. Measured in session 16 (``bench/discovery_cap_decisions.py`` on
+#: (``bench/discovery_cap_decisions.py``; session 15's ``discovery_capped_t.py`` is folded into it): all 8 ratios of
+#: the angle law positive (0.38-6.1), p 0.033 > 0.05/8 as it is, 0.00096 capped at log 10.
+#: The reported ratios, the pooled shrink and the mean ratio that ranks the passing candidates are not capped: only
+#: the tests' input is. Measured in session 16 (``bench/discovery_cap_decisions.py`` on
 #: the default's documents, which replays every test of a run): the cap changes no decision on the 60 strict nulls of
 #: the second generator, the 60 nulls of our simulator or the 14 outside files (4/8 exact, 0/6 false, 0 steps not
 #: shrinking either way); on our simulator's ten-case sweep it names angle + offset exactly (3/10 exact, not 2/10).
