@@ -143,7 +143,8 @@ def constrained_lstsq(x: np.ndarray, y: np.ndarray, rows: np.ndarray) -> np.ndar
     z = -r[:-1] / r[-1]
     c = v @ ((z + d) / sv)
     # polish: NNLS leaves the active rows at ~1e-9 of the coefficients' scale; the least squares on the null space
-    # of the rows NNLS used (u > 0) hits them exactly, and is kept when it keeps every row
+    # of the rows NNLS used (u > 0) hits them exactly, and is kept when it keeps every row and fits as well (a
+    # wrong active set would give a feasible but worse fit)
     active = rows[norms > 0][u > 0]
     if active.size:
         _, sa, vta = np.linalg.svd(active)
@@ -151,7 +152,8 @@ def constrained_lstsq(x: np.ndarray, y: np.ndarray, rows: np.ndarray) -> np.ndar
         if null.shape[1]:
             polished = null @ lstsq(x @ null, y, lapack_driver="gelsy")[0]
             scale = np.abs(rows) @ np.abs(polished)
-            if np.all(rows @ polished >= -1e-12 * np.maximum(scale, 1.0)):
+            as_good = np.sum((y - x @ polished) ** 2) <= np.sum((y - x @ c) ** 2) * (1 + 1e-6) + 1e-12
+            if as_good and np.all(rows @ polished >= -1e-12 * np.maximum(scale, 1.0)):
                 c = polished
     return c
 
