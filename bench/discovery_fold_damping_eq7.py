@@ -9,7 +9,10 @@ stances (as ``stiffness_gate.shoot_held_out`` does, k0 not shot), then per held-
 ``B = dM/domega = b0 + b1 (omega - omega0)`` along the measured omega and along the forward-simulated one (its
 minimum and the share of samples with B < 0), the stance's simulated end and its held-out gap. K = k0 > 0 here.
 
-Usage: .venv/bin/python bench/discovery_fold_damping_eq7.py [--case joint_damping] [--seed 0] [--freq 2.2]
+``--eq7-fit``: the same with ``identify.EQ7_FIT`` on (the law identified subject to Eq. 7 on the training stances'
+samples; session 16, second helper), set in this process: run with ``PYTHONPATH=<this checkout>``.
+
+Usage: .venv/bin/python bench/discovery_fold_damping_eq7.py [--case joint_damping] [--seed 0] [--freq 2.2] [--eq7-fit]
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import discovery_hit_rates as hr  # noqa: E402
 
 from hop_impedance.discovery import forward_selection as fs  # noqa: E402
+from hop_impedance.discovery import identify as identify_module  # noqa: E402
 from hop_impedance.discovery.forward import ground_of  # noqa: E402
 from hop_impedance.discovery.identify import identify, per_stance_push_off, touchdown_moments  # noqa: E402
 from hop_impedance.discovery.measurement import measure_trial  # noqa: E402
@@ -36,13 +40,15 @@ def main() -> None:
     ap.add_argument("--case", default="joint_damping")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--freq", type=float, default=2.2)
+    ap.add_argument("--eq7-fit", action="store_true", help="identify.EQ7_FIT = True (the law fitted subject to Eq. 7)")
     args = ap.parse_args()
+    identify_module.EQ7_FIT = args.eq7_fit
     rec, freq = hr.generate(args.case, args.seed, 8, freqs=(args.freq,))
     trial = measure_trial(rec)
     scales = fs.gap_scales(trial)
     base = ModelSpec(body_fraction=0.0)
     order = [s.index for s in trial.stances]
-    print(f"{args.case} seed {args.seed} f={freq}: stances {order}")
+    print(f"{args.case} seed {args.seed} f={freq}: stances {order}, EQ7_FIT {identify_module.EQ7_FIT}")
     for label, train, test in [("all", tuple(order), tuple(order))] + [
             (f"fold {k}", tr, te) for k, (tr, te) in enumerate(fold_indices(order, 2))]:
         spec, coefs = identify(base, trial, [s for s in trial.stances if s.index in train], "joint_damping")
@@ -51,6 +57,9 @@ def main() -> None:
         for j, joint in enumerate(("ankle", "knee", "hip")):
             print(f"  {joint}: " + ", ".join(f"{n} {c:.3g}" for n, c in zip(names, coefs[j])))
         ib0, ib1 = names.index("b0"), names.index("b1")
+        b_train = np.concatenate([coefs[:, ib0] + coefs[:, ib1] * (s.omega_rad_s - s.omega_rad_s[0])
+                                  for s in trial.stances if s.index in train])
+        print(f"  training samples: min B {np.round(b_train.min(0), 4)}, share B<0 {np.round((b_train < 0).mean(0), 3)}")
         for i in test:
             s = next(x for x in trial.stances if x.index == i)
             b_meas = coefs[:, ib0] + coefs[:, ib1] * (s.omega_rad_s - s.omega_rad_s[0])
