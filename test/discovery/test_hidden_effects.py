@@ -156,11 +156,17 @@ def test_final_gap_is_below_the_baselines_and_within_twice_the_true_models():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 16 asks for 1.2x; measured 1.64x: the joint law is identified by "
-                                       "regression on ID moments, not by shooting through the simulator")
 def test_final_gap_within_1p2_of_the_true_models():
+    """Issue 16: the final model identified through the simulation (``final_gap_through_simulation``: per fold the
+    law identified on the training stances, k0 shot on their forward gap, the held-out stances simulated) is within
+    1.2x of the true law's gap. Measured (session 17): 0.00538 against the truth's 0.00549 (0.98x); with the
+    regression's coefficients, left out one stance at a time, 0.00792 (1.44x: the joint law identified by
+    regression on the ID moments, not through the simulator)."""
     doc, floor = discovered("angle+offset"), _truth_gap("angle+offset")
-    assert doc["final_gap"]["total"] < RATIO_TO_TRUTH * floor
+    shot = doc["final_gap_through_simulation"]
+    assert shot["total"] < RATIO_TO_TRUTH * floor
+    assert shot["total"] < doc["final_gap"]["total"]  # shooting k0 is what closes it
+    assert shot["held_out_gap_regression_shot"][1] == pytest.approx(shot["total"], abs=1e-5)
 
 
 def test_two_surface_law_of_the_soft_hops_is_seed_001s_soft_surface():
