@@ -40,7 +40,9 @@ gate at alpha, ``stiffness_gate.SCREEN_CORRECTED = False``); ``--surface-folds K
 15, 0 the leave-one-out of sessions 1-14); ``--log-ratio-cap X``: ``forward_selection.LOG_RATIO_CAP`` (the t-tests see
 every per-stance log gap ratio clipped to +-X, natural log units; log 10 = 2.3026 is the default since session 16,
 ``inf`` the uncapped test of sessions 1-15); ``--eq7-fit``: ``identify.EQ7_FIT`` (every joint law identified subject to
-seed 000's Eq. 7, K >= 0 and B >= 0 on the training samples; session 16's option, off by default); set in this process,
+seed 000's Eq. 7, K >= 0 and B >= 0 on the training samples; session 16's option, off by default);
+``--touchdown-velocity-fit W``: ``forward_selection.TOUCHDOWN_VELOCITY_FIT_S`` (each model's touchdown velocities
+corrected on the stance's first W s of joint angles; session 17's option, off by default); set in this process,
 so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
@@ -155,6 +157,9 @@ def main() -> None:
                          "(natural log; default log 10 = 2.3026 since session 16; inf: no cap)")
     ap.add_argument("--eq7-fit", action="store_true",
                     help="identify.EQ7_FIT = True: the joint law identified subject to Eq. 7 (K >= 0, B >= 0)")
+    ap.add_argument("--touchdown-velocity-fit", type=float, default=None, metavar="W",
+                    help="forward_selection.TOUCHDOWN_VELOCITY_FIT_S = W: each model's touchdown velocities corrected "
+                         "on the stance's first W s (session 17's option)")
     args = ap.parse_args()
     _configure_gate(ap, args)
     JSON_DIR[:] = [args.json_dir] if args.json_dir else []
@@ -204,6 +209,12 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
         from hop_impedance.discovery import identify
 
         identify.EQ7_FIT = True
+    if args.touchdown_velocity_fit is not None:
+        if args.scheduler:
+            ap.error("--touchdown-velocity-fit is set in this process: run without --scheduler")
+        from hop_impedance.discovery import forward_selection
+
+        forward_selection.TOUCHDOWN_VELOCITY_FIT_S = args.touchdown_velocity_fit
     if args.gate_folds is None and args.gate_search is None and not args.gate_converge and not args.screen_uncorrected:
         return
     if args.scheduler:

@@ -14,27 +14,117 @@ The law here is the generator's (touchdown moment 0 at the contact), not the ``M
 separates the body and the state from the law's reference; ``bench/discovery_stance_edges.py`` gives the
 candidate-like figures.
 
+``--fit-velocities W`` (a lead, not in ``discover``): the candidate-like true law (its ``M_td`` estimated as a
+candidate's, ``discovery_stance_edges``) simulated from the measured posture with the touchdown *velocities* (toe vz,
+q1..q4 rates) fitted per stance to the measured joint angles of the stance's first W s
+(``forward_selection.velocity_window_residual``: residuals in units of 10 mrad per sample / sqrt(samples), a Gaussian
+prior on the change of 0.5 m/s, 3 rad/s) by Levenberg-Marquardt to completion, and by 1 and 2 Gauss-Newton steps with
+the stance's reference Jacobian (1 step: the option ``forward_selection.TOUCHDOWN_VELOCITY_FIT_S``), against the
+measured velocities; printed: the simulated minus measured take-off (as the gap's duration term reads it), RMS, and
+the window simulations LM took. ``--noisy``: the recording with the sensors' noise (1 mm markers, plate noise).
+``--outside FILE ...``: the same on outside recordings with their truth law (``discovery_stance_edges``) instead.
+
 Usage: .venv/bin/python bench/discovery_touchdown_sensitivity.py [--freq 1.53] [--seed 0] [--hops 8]
+[--fit-velocities 0.06 [--noisy] [--outside FILE ...]]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
+import time
 from dataclasses import replace
 from functools import partial
+from pathlib import Path
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from hop_impedance.biomech.body_model import body_model_from_stature
+from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery import measurement
+from hop_impedance.discovery.identify import touchdown_moments
 from hop_impedance.discovery.measurement import measure_trial
+from hop_impedance.discovery.model import ModelSpec
+from hop_impedance.io.recording_io import load_recording
 from hop_impedance.simulation import stance_set as sset
 from hop_impedance.simulation.dynamics import chain_from_body_model
+from hop_impedance.simulation.ground import SURFACES
 from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, Effects
 from hop_impedance.simulation.sensors import SensorConfig, noise_free
 from hop_impedance.simulation.stance import simulate_stance
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from discovery_truth_gap import STRICT_GROUND, fitted_law, true_touchdown_moment, truth_law  # noqa: E402
+
 NULL = Effects(angle_dependent_stiffness=False, damping=False, push_off=False)
+def fitted_velocities(chain, law, ground, s) -> tuple:
+    """(touchdown state with the velocities fitted to completion by Levenberg-Marquardt on ``law``'s own window
+    residual, ``forward_selection.velocity_window_residual``; simulations it took)."""
+    count = [0]
+
+    def resid(d):
+        count[0] += 1
+        return fs.velocity_window_residual(chain, law, ground, s, d)
+
+    sol = least_squares(resid, np.zeros(5), method="lm", diff_step=1e-3, max_nfev=60)
+    return fs._with_velocity_change(s, sol.x), count[0]
+
+
+def gauss_newton_velocities(chain, law, ground, s, steps: int):
+    """The touchdown state after ``steps`` Gauss-Newton steps with the stance's reference Jacobian (1 step:
+    ``forward_selection.touchdown_for_gap``)."""
+    jac = fs.reference_velocity_jacobian(chain, s)
+    d = np.zeros(5)
+    for _ in range(steps):
+        d = d - np.linalg.lstsq(jac, fs.velocity_window_residual(chain, law, ground, s, d), rcond=None)[0]
+    return fs._with_velocity_change(s, d)
+
+
+def take_off_errors(trial, laws, grounds, window_s: float, label: str) -> None:
+    """Print the simulated minus measured take-off from the measured and the fitted velocities (ms)."""
+    fs.TOUCHDOWN_VELOCITY_FIT_S = window_s
+    level = fs.take_off_level_n(trial)
+    t0, sims = time.perf_counter(), 0
+    errs = []
+    for s, law, ground in zip(trial.stances, laws, grounds):
+        measured = float(s.takeoff_s - s.touchdown_s)
+        fitted, n = fitted_velocities(trial.chain, law, ground, s)
+        sims += n
+        gn = [gauss_newton_velocities(trial.chain, law, ground, s, k) for k in (1, 2)]
+        row = []
+        for td in (s.touchdown, fitted, *gn):
+            sim = simulate_stance(trial.chain, law, ground, td, t_max_s=1.5 * float(s.t_s[-1]) + 0.05, rtol=fs.RTOL,
+                                  atol=fs.ATOL, sample_times_s=s.t_s)  # the state as given
+            row.append(1e3 * (fs.simulated_take_off_s(sim, s, level) - measured))
+        errs.append(row)
+    e = np.array(errs)
+    rms = np.sqrt(np.mean(e**2, axis=0))
+    print(f"{label}: true law's take-off error, measured velocities RMS {rms[0]:.1f} ms [{e[:, 0].min():+.1f}, "
+          f"{e[:, 0].max():+.1f}], fitted over the first {1e3 * window_s:.0f} ms RMS {rms[1]:.1f} ms "
+          f"[{e[:, 1].min():+.1f}, {e[:, 1].max():+.1f}]; {sims} window simulations, {time.perf_counter() - t0:.1f} s; "
+          f"with the stance's reference Jacobian (6 window simulations per stance) and 1 / 2 Gauss-Newton steps of "
+          f"the law's own (1 / 2 window simulations per stance and law): RMS {rms[2]:.1f} / {rms[3]:.1f} ms",
+          flush=True)
+
+
+def outside_fit(path: Path, window_s: float) -> None:
+    """:func:`take_off_errors` on an outside recording with its truth law (as ``discovery_stance_edges`` builds it)."""
+    rec = load_recording(path)
+    truth = json.loads(path.with_suffix(".truth.json").read_text())
+    latency = 0.0
+    if "stream_latency" in truth["effects"]:
+        latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
+    trial = measure_trial(rec, marker_latency_s=latency)
+    laws, grounds = [], []
+    for s in trial.stances:
+        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
+        spec, coefs = truth_law(hop)
+        laws.append(fitted_law("estimated", spec, coefs, true_touchdown_moment("estimated", truth, hop, s, rec.start_ns,
+                                                                              spec, coefs), s))
+        grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else STRICT_GROUND)
+    take_off_errors(trial, laws, grounds, window_s, path.stem)
 
 
 def generator_touchdowns(chain, freq_hz: float, seed: int, hops: int):
@@ -50,7 +140,25 @@ def main() -> None:
     ap.add_argument("--freq", type=float, default=1.53)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--hops", type=int, default=8)
+    ap.add_argument("--fit-velocities", type=float, default=None, metavar="W",
+                    help="the touchdown velocities fitted to the first W s (see the module docstring)")
+    ap.add_argument("--noisy", action="store_true", help="with the sensors' noise (with --fit-velocities)")
+    ap.add_argument("--outside", nargs="*", default=None, help="outside recordings instead (with --fit-velocities)")
     args = ap.parse_args()
+    if args.fit_velocities is not None:
+        if args.outside is not None:
+            for f in args.outside:
+                outside_fit(Path(f), args.fit_velocities)
+            return
+        sensors = SensorConfig() if args.noisy else noise_free(SensorConfig())
+        rec, _ = sset.simulate_stance_set_recording(args.freq, ("rigid",), args.hops, args.seed, NULL, sensors)
+        trial = measure_trial(rec)
+        law, _, _ = sset._stance_set_law(trial.chain, args.freq, NULL, None, sset.RIGID_NO_BOUNCE, DEFAULT_TOUCHDOWN_RHO)
+        k0 = np.array(law.parts[0].k0, float)[:, None]
+        laws = [fitted_law("estimated", ModelSpec(), k0, touchdown_moments(ModelSpec(), k0, s), s) for s in trial.stances]
+        take_off_errors(trial, laws, [sset.RIGID_NO_BOUNCE] * len(laws), args.fit_velocities,
+                        f"our simulator's null, {args.freq} Hz, seed {args.seed}{', noisy' if args.noisy else ''}")
+        return
     rec, truth = sset.simulate_stance_set_recording(args.freq, ("rigid",), args.hops, args.seed, NULL,
                                                     noise_free(SensorConfig()))
     trial = measure_trial(rec)
