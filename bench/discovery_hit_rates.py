@@ -155,6 +155,9 @@ def main() -> None:
                          "(natural log; default log 10 = 2.3026 since session 16; inf: no cap)")
     ap.add_argument("--eq7-fit", action="store_true",
                     help="identify.EQ7_FIT = True: the joint law identified subject to Eq. 7 (K >= 0, B >= 0)")
+    ap.add_argument("--gate-per-signal", action="store_true",
+                    help="stiffness_gate.GATE_PER_SIGNAL = True (session 17's option): the gate also passes a candidate "
+                         "significantly better on one sampled signal (Bonferroni over the 7) and worse on none")
     args = ap.parse_args()
     _configure_gate(ap, args)
     JSON_DIR[:] = [args.json_dir] if args.json_dir else []
@@ -204,6 +207,12 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
         from hop_impedance.discovery import identify
 
         identify.EQ7_FIT = True
+    if args.gate_per_signal:
+        if args.scheduler:
+            ap.error("--gate-per-signal is set in this process: run without --scheduler")
+        from hop_impedance.discovery import stiffness_gate
+
+        stiffness_gate.GATE_PER_SIGNAL = True
     if args.gate_folds is None and args.gate_search is None and not args.gate_converge and not args.screen_uncorrected:
         return
     if args.scheduler:
