@@ -145,7 +145,7 @@ SHOOT_EFFECT_SIZE = False
 #: significantly better, no signal is significantly worse (one-sided t-test the other way at ALPHA, uncorrected), and
 #: the pooled total gap still shrinks by MIN_SHRINK. Why (measured on ``angle_dependent_stiffness_1201``,
 #: ``bench/discovery_angle_channels.py``): the angle law beats the shot constant stiffness on the plate's force in every
-#: held-out stance (log ratios 1.2-2.3, p 5e-7) and on the ankle moment (1.2-2.3, p 5e-6), but each stance's total gap
+#: held-out stance (log ratios 1.2-2.3, p 4.6e-7) and on the ankle moment (1.2-2.3, p 5e-6), but each stance's total gap
 #: is about half its hip angle and hip moment, which neither model nor the truth's per-hop law fits (the generator sets
 #: the hip's stiffness hop by hop, 58-115 N m/rad), so the total's log ratios scatter (SD 0.65) and p = 0.017 > 0.05/8.
 GATE_PER_SIGNAL = False

@@ -47,7 +47,7 @@ def test_1201_total_gap_test_misses_the_angle_law():
 
 
 def test_1201_per_signal_test_names_it_on_the_plate_force_and_ankle_moment():
-    """Per signal: GRF better in all 8 stances (p 3.5e-7), ankle moment (p 5e-6), both below 0.05 / (8 * 7); no signal
+    """Per signal: GRF better in all 8 stances (p 4.6e-7), ankle moment (p 5e-6), both below 0.05 / (8 * 7); no signal
     significantly worse (the hip moment's p_worse 0.14 is the lowest)."""
     cur, cand = _errors()
     out = sg.per_signal_test(cur, cand, 0.45, 8)
@@ -99,3 +99,30 @@ def test_1201_discover_with_the_option_names_the_angle_law_exactly(monkeypatch):
     g = doc["selection"]["stiffness_through_simulation"][0]["candidates"]["angle_dependent_stiffness"]
     assert g["p_value"] > 0.05 / 8 and g["per_signal"]["passes"]
     assert g["per_signal"]["signals"]["grf"]["p_better"] < 1e-5
+
+
+#: Strict null seed 47 of the second generator (no effect), round 0: the time-dependent activation at the gate
+#: (``bench/discovery_hit_rates.py --cases "" --strict-cases null --strict-null-seed-list 1,3,7,17,32,39,43,47 --hops 8
+#: --gate-per-signal``, 06:00-06:09 UTC): per signal, per held-out stance, log(current / activation).
+NULL47_LOG_RATIOS = {
+    "grf": [0.305, 0.594, 0.271, 0.862, 0.069, 0.3, 0.451, 0.095],
+    "angle_ankle": [0.754, 1.335, 0.568, 1.899, 0.542, 0.638, 0.87, 0.833],
+    "angle_knee": [-0.088, -1.823, -0.191, -3.507, -0.15, -0.055, -0.573, -0.361],
+    "angle_hip": [-0.127, -0.088, 0.468, 0.295, -0.029, 0.242, 0.004, 0.279],
+    "moment_ankle": [0.593, 1.013, 0.463, 1.488, 0.688, 0.459, 0.695, 0.789],
+    "moment_knee": [-0.148, -1.437, -0.265, -2.978, -0.208, 0.108, -0.467, 0.017],
+    "moment_hip": [-0.392, -0.342, 0.007, -0.474, -0.231, -0.274, -0.381, -0.004],
+}
+
+
+def test_strict_null_47_one_signal_better_is_stopped_by_the_signals_it_makes_worse():
+    """On a null the activation is significantly better on the ankle moment (p 1.8e-4) and ankle angle (3.9e-4), below
+    0.05 / 56, but worse on the hip moment (p_worse 0.0021), knee angle (0.030) and knee moment (0.045), and the total
+    gap does not shrink (-0.013): not passed. Without the 'worse on none' clause the shrink floor alone stops it."""
+    d = np.array([NULL47_LOG_RATIOS[s] for s in GAP_SIGNALS]).T
+    out = sg.per_signal_test(np.exp(d), np.ones_like(d), -0.013, 8)
+    sig = out["signals"]
+    assert sig["moment_ankle"]["p_better"] < out["level"] and sig["angle_ankle"]["p_better"] < out["level"]
+    assert sig["moment_hip"]["p_worse"] == pytest.approx(0.0021, abs=1e-4)
+    assert not out["passes"]
+    assert not sg.per_signal_test(np.exp(d), np.ones_like(d), 0.45, 8)["passes"]  # the worse signals alone stop it
