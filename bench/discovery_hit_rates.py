@@ -42,8 +42,9 @@ every per-stance log gap ratio clipped to +-X, natural log units; log 10 = 2.302
 ``inf`` the uncapped test of sessions 1-15); ``--eq7-fit``: ``identify.EQ7_FIT`` (every joint law identified subject to
 seed 000's Eq. 7, K >= 0 and B >= 0 on the training samples; session 16's option, off by default);
 ``--touchdown-velocity-fit W``: ``forward_selection.TOUCHDOWN_VELOCITY_FIT_S`` (each model's touchdown velocities
-corrected on the stance's first W s of joint angles; session 17's option, off by default); set in this process,
-so only without ``--scheduler``. Run with
+corrected on the stance's first W s of joint angles; session 17's option, off by default); ``--gate-per-signal``:
+``stiffness_gate.GATE_PER_SIGNAL`` (session 17's option, off by default); set in this process, so only without
+``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
 """
@@ -160,6 +161,9 @@ def main() -> None:
     ap.add_argument("--touchdown-velocity-fit", type=float, default=None, metavar="W",
                     help="forward_selection.TOUCHDOWN_VELOCITY_FIT_S = W: each model's touchdown velocities corrected "
                          "on the stance's first W s (session 17's option)")
+    ap.add_argument("--gate-per-signal", action="store_true",
+                    help="stiffness_gate.GATE_PER_SIGNAL = True (session 17's option): the gate also passes a candidate "
+                         "significantly better on one sampled signal (Bonferroni over the 7) and worse on none")
     args = ap.parse_args()
     _configure_gate(ap, args)
     JSON_DIR[:] = [args.json_dir] if args.json_dir else []
@@ -215,6 +219,12 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
         from hop_impedance.discovery import forward_selection
 
         forward_selection.TOUCHDOWN_VELOCITY_FIT_S = args.touchdown_velocity_fit
+    if args.gate_per_signal:
+        if args.scheduler:
+            ap.error("--gate-per-signal is set in this process: run without --scheduler")
+        from hop_impedance.discovery import stiffness_gate
+
+        stiffness_gate.GATE_PER_SIGNAL = True
     if args.gate_folds is None and args.gate_search is None and not args.gate_converge and not args.screen_uncorrected:
         return
     if args.scheduler:
