@@ -158,13 +158,13 @@ def constrained_lstsq(x: np.ndarray, y: np.ndarray, rows: np.ndarray) -> np.ndar
     return c
 
 
-def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance]) -> tuple[np.ndarray, float]:
+def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance], eq7_fit: bool | None = None) -> tuple[np.ndarray, float]:
     """Pooled least-squares coefficients of the joint law, with a free touchdown moment per stance.
 
     The baseline is ``M = M_td + K phi`` (the strict baseline of issue 16): the touchdown moment
     ``M_td`` differs from stance to stance and is a nuisance, not an effect. It is absorbed by
     demeaning regressors and moments per stance (the within-stance estimator); its value on any
-    stance is :func:`touchdown_moments`.
+    stance is :func:`touchdown_moments`. ``eq7_fit``: subject to Eq. 7 or not (None: :data:`EQ7_FIT`).
 
     Returns
     -------
@@ -174,14 +174,15 @@ def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance]) -> tuple[np.nd
     """
     feats = [stance_features(spec, s.t_s, s.rho_rad, s.omega_rad_s) for s in stances]
     cores = [core(len(s.t_s)) for s in stances]
-    passive_rows = [passivity_rows(spec, s) for s in stances] if EQ7_FIT else []
+    eq7_fit = EQ7_FIT if eq7_fit is None else eq7_fit
+    passive_rows = [passivity_rows(spec, s) for s in stances] if eq7_fit else []
     coefs, sse = [], 0.0
     for j in range(3):
         # per-stance touchdown moment M_td (nuisance): every stance demeaned on its core
         x = np.concatenate([f[j][c] - f[j][c].mean(axis=0) for f, c in zip(feats, cores)])
         y = np.concatenate([s.moment_nm[c, j] - s.moment_nm[c, j].mean() for s, c in zip(stances, cores)])
         c, *_ = lstsq(x, y, lapack_driver="gelsy")
-        if EQ7_FIT:
+        if eq7_fit:
             rows = np.concatenate([r[j] for r in passive_rows])
             if np.min(rows @ c) < 0.0:  # else the unconstrained optimum keeps Eq. 7 and is the constrained one
                 c = constrained_lstsq(x, y, rows)
@@ -190,11 +191,11 @@ def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance]) -> tuple[np.nd
     return np.array(coefs), sse
 
 
-def _fit_timed(spec: ModelSpec, stances, grid: list[dict]) -> tuple[ModelSpec, np.ndarray]:
+def _fit_timed(spec: ModelSpec, stances, grid: list[dict], eq7_fit: bool | None = None) -> tuple[ModelSpec, np.ndarray]:
     best: tuple[ModelSpec, np.ndarray, float] | None = None
     for params in grid:
         trial_spec = replace(spec, **params)
-        coefs, sse = fit_joint_law(trial_spec, stances)
+        coefs, sse = fit_joint_law(trial_spec, stances, eq7_fit)
         if best is None or sse < best[2]:
             best = (trial_spec, coefs, sse)
     assert best is not None, "empty grid"  # the callers' grids are non-empty constants
@@ -336,11 +337,12 @@ def fit_ground_damping(stances: list[MeasuredStance], c: float, p: float, offset
 
 
 def identify(spec: ModelSpec, trial: MeasuredTrial, stances: list[MeasuredStance],
-             effect: str | None = None) -> tuple[ModelSpec, np.ndarray]:
+             effect: str | None = None, eq7_fit: bool | None = None) -> tuple[ModelSpec, np.ndarray]:
     """Fit the model (optionally with ``effect`` added) on ``stances``.
 
     The nonlinear parameters of effects already in ``spec`` stay as they are;
-    the joint-law coefficients are always re-fitted.
+    the joint-law coefficients are always re-fitted. ``eq7_fit``: the joint law subject to Eq. 7 or not
+    (None: :data:`EQ7_FIT`; the body-split nuisance search passes False, ``body_nuisance`` says why).
 
     Returns
     -------
@@ -355,17 +357,17 @@ def identify(spec: ModelSpec, trial: MeasuredTrial, stances: list[MeasuredStance
                 for f in ("secant", "tangent")]
         grid += [{"tau_s": t, "activation_shape": "bell", "activation_form": f} for t in BELL_GRID_S
                  for f in ("secant", "tangent")]
-        return _fit_timed(spec, stances, grid)
+        return _fit_timed(spec, stances, grid, eq7_fit)
     if effect == "active_push_off":
         grid = [{"onset_s": o, "duration_s": d} for o in ONSET_GRID_S for d in DURATION_GRID_S]
-        return _fit_timed(spec, stances, grid)
+        return _fit_timed(spec, stances, grid, eq7_fit)
     if effect == "surface_compliance":
         spec = fit_surfaces(spec, stances)
     elif effect == "force_plate_offset":
         spec = replace(spec, offset_n=fit_offset(stances))
     elif effect == "stream_latency":
         spec = replace(spec, latency_s=fit_latency(trial, stances, spec))
-    coefs, _ = fit_joint_law(spec, stances)
+    coefs, _ = fit_joint_law(spec, stances, eq7_fit)
     return spec, coefs
 
 
