@@ -29,7 +29,7 @@ from dataclasses import replace
 
 import numpy as np
 from scipy.linalg import lstsq
-from scipy.optimize import minimize_scalar, nnls
+from scipy.optimize import minimize_scalar
 
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial
@@ -45,6 +45,8 @@ from hop_impedance.discovery.model import (
     feature_names,
     stance_features,
 )
+from hop_impedance.impedance.qp_fit import exact_constrained_lstsq
+from hop_impedance.impedance.regression_model import PARAMETER_NAMES, damping_regressors, stiffness_regressors
 from hop_impedance.recording import GRAVITY_M_S2
 
 SIGNALS: tuple[str, ...] = tuple(f"moment_{j}" for j in JOINT_NAMES) + ("toe", "com", "flight")
@@ -101,61 +103,24 @@ def passivity_rows(spec: ModelSpec, s: MeasuredStance) -> list[np.ndarray]:
         w = s.omega_rad_s[:, j]
         dw = w - w[0]
         k3 = np.abs(w) - np.abs(w[0]) if spec.rate_form == "speed" else dw
-        slopes = {"k0": np.ones_like(dr), "k1": dr, "k2": dr**2, "k3": k3}
+        # the seed's Eq. 7 rows (impedance.regression_model, used by impedance.constraints): K = k0 + k1 d + k2 d^2
+        # + k3 w and B = b0 + b1 w + ..., in PARAMETER_NAMES columns; discovery's terms are a subset of them
+        seed_k = stiffness_regressors(dr, k3)
         k_rows = np.zeros((len(dr), len(names)))
         for e in elastic_terms(spec):
-            k_rows[:, names.index(e)] = slopes[e]
+            slope = seed_k[:, PARAMETER_NAMES.index(e)]
+            k_rows[:, names.index(e)] = slope
             if g is not None:
-                k_rows[:, names.index("act_" + e)] = g * slopes[e]
+                k_rows[:, names.index("act_" + e)] = g * slope
         rows = [k_rows]
         if spec.has("joint_damping"):
+            seed_b = damping_regressors(dr, dw)
             b_rows = np.zeros((len(dr), len(names)))
-            b_rows[:, names.index("b0")] = 1.0
-            b_rows[:, names.index("b1")] = dw
+            for e in ("b0", "b1"):
+                b_rows[:, names.index(e)] = seed_b[:, PARAMETER_NAMES.index(e)]
             rows.append(b_rows)
         out.append(np.concatenate(rows))
     return out
-
-
-def constrained_lstsq(x: np.ndarray, y: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """``argmin |y - x c|^2`` subject to ``rows @ c >= 0``, exactly, through NNLS (Lawson and Hanson's LSI -> LDP).
-
-    With the thin SVD ``x = U S V^T`` (rank r; ``c = V_r w``, the minimum-norm reading of a rank-deficient ``x``),
-    ``z = S_r w - U_r^T y`` turns the problem into the least-distance program ``min |z|`` subject to ``G z >= h``,
-    ``G = rows V_r S_r^-1`` (rows scaled to unit norm), ``h = -G U_r^T y``, whose solution is
-    ``z = -r[:r] / r[r]`` with ``r = E u - e`` and ``u = nnls(E = [G^T; h^T], e = (0, ..., 0, 1))``. ``c = 0`` is
-    feasible, so the program always has a solution.
-    """
-    u_mat, sv, vt = np.linalg.svd(x, full_matrices=False)
-    keep = sv > sv[0] * max(x.shape) * np.finfo(float).eps
-    u_mat, sv, v = u_mat[:, keep], sv[keep], vt[keep].T
-    d = u_mat.T @ y
-    g = (rows @ v) / sv
-    norms = np.linalg.norm(g, axis=1)
-    g, r_use = g[norms > 0], norms[norms > 0]
-    g = g / r_use[:, None]
-    h = -g @ d
-    e_mat = np.vstack([g.T, h[None, :]])
-    target = np.zeros(len(sv) + 1)
-    target[-1] = 1.0
-    u, _ = nnls(e_mat, target, maxiter=50 * e_mat.shape[1])
-    r = e_mat @ u - target
-    z = -r[:-1] / r[-1]
-    c = v @ ((z + d) / sv)
-    # polish: NNLS leaves the active rows at ~1e-9 of the coefficients' scale; the least squares on the null space
-    # of the rows NNLS used (u > 0) hits them exactly, and is kept when it keeps every row and fits as well (a
-    # wrong active set would give a feasible but worse fit)
-    active = rows[norms > 0][u > 0]
-    if active.size:
-        _, sa, vta = np.linalg.svd(active)
-        null = vta[int(np.sum(sa > sa[0] * max(active.shape) * np.finfo(float).eps)):].T
-        if null.shape[1]:
-            polished = null @ lstsq(x @ null, y, lapack_driver="gelsy")[0]
-            scale = np.abs(rows) @ np.abs(polished)
-            as_good = np.sum((y - x @ polished) ** 2) <= np.sum((y - x @ c) ** 2) * (1 + 1e-6) + 1e-12
-            if as_good and np.all(rows @ polished >= -1e-12 * np.maximum(scale, 1.0)):
-                c = polished
-    return c
 
 
 def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance], eq7_fit: bool | None = None) -> tuple[np.ndarray, float]:
@@ -185,7 +150,7 @@ def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance], eq7_fit: bool 
         if eq7_fit:
             rows = np.concatenate([r[j] for r in passive_rows])
             if np.min(rows @ c) < 0.0:  # else the unconstrained optimum keeps Eq. 7 and is the constrained one
-                c = constrained_lstsq(x, y, rows)
+                c = exact_constrained_lstsq(x, y, rows)
         coefs.append(c)
         sse += float(np.sum((y - x @ c) ** 2))
     return np.array(coefs), sse
