@@ -2,7 +2,9 @@
 
 Per thigh/HAT fraction on a grid (``--grid``, default -0.5..0.5 step 0.05): the strict baseline identified on all
 stances with that body (its hip/knee/ankle k0, and the unconstrained hip k0), and its in-sample forward gap (the
-quantity ``body_nuisance.choose_body`` minimises), for EQ7_FIT off and on. Then ``choose_body`` itself, off and on.
+quantity ``body_nuisance.choose_body`` minimises, with the search's fit as in session 16), for EQ7_FIT off and on.
+Then ``choose_body`` itself: off; on with the search's fit constrained (session 16's code); on as now (session 17:
+the search's fit unconstrained).
 Default recording: the second generator's strict null seed 35 (8 hops), which names a false activation with the
 option on (session 16).
 
@@ -38,6 +40,10 @@ def main() -> None:
     trial0 = measure_trial(rec)
     scales = gap_scales(trial0)
     grid = [float(v) for v in args.grid.split(",")] if args.grid else np.round(np.arange(-0.5, 0.501, 0.05), 3)
+    def constrained_search(spec, trial, stances, effect=None, eq7_fit=None):
+        """The search's identification as before session 17's fix: EQ7_FIT's setting, whatever it asks."""
+        return idm.identify(spec, trial, stances, effect)
+
     print(f"strict null seed {args.strict_null_seed}: fraction | k0 ankle knee hip (unconstrained) | gap off | "
           f"k0 hip, gap on")
     for f in grid:
@@ -46,15 +52,20 @@ def main() -> None:
         for on in (False, True):
             idm.EQ7_FIT = on
             bn._CONTEXT.clear()
+            bn.identify = constrained_search if on else idm.identify
             _, coefs = idm.identify(ModelSpec(body_fraction=float(f)), t, t.stances)
             gap = bn.in_sample_gap(t, scales, ModelSpec(body_fraction=float(f)))
             row.append((coefs[:, 0], gap))
+        bn.identify = idm.identify
         print(f"  {f:+.2f} | {np.round(row[0][0], 1)} | {row[0][1]:.4f} | {row[1][0][2]:.3g}, {row[1][1]:.4f}",
               flush=True)
-    for on in (False, True):
+    for on, label in ((False, "off"), (True, "on, search constrained (session 16)"), (True, "on (session 17)")):
         idm.EQ7_FIT = on
+        if label.endswith("(session 16)"):
+            bn.identify = constrained_search
         _, choice = bn.choose_body(rec, trial0)
-        print(f"choose_body EQ7_FIT={on}: {choice.as_json()}")
+        bn.identify = idm.identify
+        print(f"choose_body EQ7_FIT {label}: {choice.as_json()}", flush=True)
 
 
 if __name__ == "__main__":
