@@ -84,6 +84,10 @@ def core(n: int) -> slice:
 #: dM/domega`` rows only when the spec has ``joint_damping`` (no other term depends on the instantaneous omega:
 #: ``S`` is an integral of it). The push-off is the active term and has no row. The law's shot ``k0`` factors
 #: (``stiffness_gate``) are positive, so they keep ``k0``'s sign, not necessarily ``K >= 0`` with ``k1``/``k2``.
+#: Session 17: the body-split nuisance search fits the baseline without the rows (``body_nuisance`` says why: on
+#: strict null seed 35 the constrained hip k0 = 0 hid the table's wrong split and an activation was named); the
+#: solver is :func:`hop_impedance.impedance.qp_fit.exact_constrained_lstsq`. With it, 0/60 false names on each
+#: generator (docs/discovery.md "Session 17").
 EQ7_FIT = False
 
 
