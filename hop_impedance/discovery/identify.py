@@ -29,7 +29,7 @@ from dataclasses import replace
 
 import numpy as np
 from scipy.linalg import lstsq
-from scipy.optimize import minimize_scalar, nnls
+from scipy.optimize import minimize_scalar
 
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial
@@ -45,6 +45,8 @@ from hop_impedance.discovery.model import (
     feature_names,
     stance_features,
 )
+from hop_impedance.impedance.qp_fit import exact_constrained_lstsq
+from hop_impedance.impedance.regression_model import PARAMETER_NAMES, damping_regressors, stiffness_regressors
 from hop_impedance.recording import GRAVITY_M_S2
 
 SIGNALS: tuple[str, ...] = tuple(f"moment_{j}" for j in JOINT_NAMES) + ("toe", "com", "flight")
@@ -82,6 +84,10 @@ def core(n: int) -> slice:
 #: dM/domega`` rows only when the spec has ``joint_damping`` (no other term depends on the instantaneous omega:
 #: ``S`` is an integral of it). The push-off is the active term and has no row. The law's shot ``k0`` factors
 #: (``stiffness_gate``) are positive, so they keep ``k0``'s sign, not necessarily ``K >= 0`` with ``k1``/``k2``.
+#: Session 17: the body-split nuisance search fits the baseline without the rows (``body_nuisance`` says why: on
+#: strict null seed 35 the constrained hip k0 = 0 hid the table's wrong split and an activation was named); the
+#: solver is :func:`hop_impedance.impedance.qp_fit.exact_constrained_lstsq`. With it, 0/60 false names on each
+#: generator (docs/discovery.md "Session 17").
 EQ7_FIT = False
 
 
@@ -101,70 +107,33 @@ def passivity_rows(spec: ModelSpec, s: MeasuredStance) -> list[np.ndarray]:
         w = s.omega_rad_s[:, j]
         dw = w - w[0]
         k3 = np.abs(w) - np.abs(w[0]) if spec.rate_form == "speed" else dw
-        slopes = {"k0": np.ones_like(dr), "k1": dr, "k2": dr**2, "k3": k3}
+        # the seed's Eq. 7 rows (impedance.regression_model, used by impedance.constraints): K = k0 + k1 d + k2 d^2
+        # + k3 w and B = b0 + b1 w + ..., in PARAMETER_NAMES columns; discovery's terms are a subset of them
+        seed_k = stiffness_regressors(dr, k3)
         k_rows = np.zeros((len(dr), len(names)))
         for e in elastic_terms(spec):
-            k_rows[:, names.index(e)] = slopes[e]
+            slope = seed_k[:, PARAMETER_NAMES.index(e)]
+            k_rows[:, names.index(e)] = slope
             if g is not None:
-                k_rows[:, names.index("act_" + e)] = g * slopes[e]
+                k_rows[:, names.index("act_" + e)] = g * slope
         rows = [k_rows]
         if spec.has("joint_damping"):
+            seed_b = damping_regressors(dr, dw)
             b_rows = np.zeros((len(dr), len(names)))
-            b_rows[:, names.index("b0")] = 1.0
-            b_rows[:, names.index("b1")] = dw
+            for e in ("b0", "b1"):
+                b_rows[:, names.index(e)] = seed_b[:, PARAMETER_NAMES.index(e)]
             rows.append(b_rows)
         out.append(np.concatenate(rows))
     return out
 
 
-def constrained_lstsq(x: np.ndarray, y: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """``argmin |y - x c|^2`` subject to ``rows @ c >= 0``, exactly, through NNLS (Lawson and Hanson's LSI -> LDP).
-
-    With the thin SVD ``x = U S V^T`` (rank r; ``c = V_r w``, the minimum-norm reading of a rank-deficient ``x``),
-    ``z = S_r w - U_r^T y`` turns the problem into the least-distance program ``min |z|`` subject to ``G z >= h``,
-    ``G = rows V_r S_r^-1`` (rows scaled to unit norm), ``h = -G U_r^T y``, whose solution is
-    ``z = -r[:r] / r[r]`` with ``r = E u - e`` and ``u = nnls(E = [G^T; h^T], e = (0, ..., 0, 1))``. ``c = 0`` is
-    feasible, so the program always has a solution.
-    """
-    u_mat, sv, vt = np.linalg.svd(x, full_matrices=False)
-    keep = sv > sv[0] * max(x.shape) * np.finfo(float).eps
-    u_mat, sv, v = u_mat[:, keep], sv[keep], vt[keep].T
-    d = u_mat.T @ y
-    g = (rows @ v) / sv
-    norms = np.linalg.norm(g, axis=1)
-    g, r_use = g[norms > 0], norms[norms > 0]
-    g = g / r_use[:, None]
-    h = -g @ d
-    e_mat = np.vstack([g.T, h[None, :]])
-    target = np.zeros(len(sv) + 1)
-    target[-1] = 1.0
-    u, _ = nnls(e_mat, target, maxiter=50 * e_mat.shape[1])
-    r = e_mat @ u - target
-    z = -r[:-1] / r[-1]
-    c = v @ ((z + d) / sv)
-    # polish: NNLS leaves the active rows at ~1e-9 of the coefficients' scale; the least squares on the null space
-    # of the rows NNLS used (u > 0) hits them exactly, and is kept when it keeps every row and fits as well (a
-    # wrong active set would give a feasible but worse fit)
-    active = rows[norms > 0][u > 0]
-    if active.size:
-        _, sa, vta = np.linalg.svd(active)
-        null = vta[int(np.sum(sa > sa[0] * max(active.shape) * np.finfo(float).eps)):].T
-        if null.shape[1]:
-            polished = null @ lstsq(x @ null, y, lapack_driver="gelsy")[0]
-            scale = np.abs(rows) @ np.abs(polished)
-            as_good = np.sum((y - x @ polished) ** 2) <= np.sum((y - x @ c) ** 2) * (1 + 1e-6) + 1e-12
-            if as_good and np.all(rows @ polished >= -1e-12 * np.maximum(scale, 1.0)):
-                c = polished
-    return c
-
-
-def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance]) -> tuple[np.ndarray, float]:
+def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance], eq7_fit: bool | None = None) -> tuple[np.ndarray, float]:
     """Pooled least-squares coefficients of the joint law, with a free touchdown moment per stance.
 
     The baseline is ``M = M_td + K phi`` (the strict baseline of issue 16): the touchdown moment
     ``M_td`` differs from stance to stance and is a nuisance, not an effect. It is absorbed by
     demeaning regressors and moments per stance (the within-stance estimator); its value on any
-    stance is :func:`touchdown_moments`.
+    stance is :func:`touchdown_moments`. ``eq7_fit``: subject to Eq. 7 or not (None: :data:`EQ7_FIT`).
 
     Returns
     -------
@@ -174,27 +143,28 @@ def fit_joint_law(spec: ModelSpec, stances: list[MeasuredStance]) -> tuple[np.nd
     """
     feats = [stance_features(spec, s.t_s, s.rho_rad, s.omega_rad_s) for s in stances]
     cores = [core(len(s.t_s)) for s in stances]
-    passive_rows = [passivity_rows(spec, s) for s in stances] if EQ7_FIT else []
+    eq7_fit = EQ7_FIT if eq7_fit is None else eq7_fit
+    passive_rows = [passivity_rows(spec, s) for s in stances] if eq7_fit else []
     coefs, sse = [], 0.0
     for j in range(3):
         # per-stance touchdown moment M_td (nuisance): every stance demeaned on its core
         x = np.concatenate([f[j][c] - f[j][c].mean(axis=0) for f, c in zip(feats, cores)])
         y = np.concatenate([s.moment_nm[c, j] - s.moment_nm[c, j].mean() for s, c in zip(stances, cores)])
         c, *_ = lstsq(x, y, lapack_driver="gelsy")
-        if EQ7_FIT:
+        if eq7_fit:
             rows = np.concatenate([r[j] for r in passive_rows])
             if np.min(rows @ c) < 0.0:  # else the unconstrained optimum keeps Eq. 7 and is the constrained one
-                c = constrained_lstsq(x, y, rows)
+                c = exact_constrained_lstsq(x, y, rows)
         coefs.append(c)
         sse += float(np.sum((y - x @ c) ** 2))
     return np.array(coefs), sse
 
 
-def _fit_timed(spec: ModelSpec, stances, grid: list[dict]) -> tuple[ModelSpec, np.ndarray]:
+def _fit_timed(spec: ModelSpec, stances, grid: list[dict], eq7_fit: bool | None = None) -> tuple[ModelSpec, np.ndarray]:
     best: tuple[ModelSpec, np.ndarray, float] | None = None
     for params in grid:
         trial_spec = replace(spec, **params)
-        coefs, sse = fit_joint_law(trial_spec, stances)
+        coefs, sse = fit_joint_law(trial_spec, stances, eq7_fit)
         if best is None or sse < best[2]:
             best = (trial_spec, coefs, sse)
     assert best is not None, "empty grid"  # the callers' grids are non-empty constants
@@ -336,11 +306,12 @@ def fit_ground_damping(stances: list[MeasuredStance], c: float, p: float, offset
 
 
 def identify(spec: ModelSpec, trial: MeasuredTrial, stances: list[MeasuredStance],
-             effect: str | None = None) -> tuple[ModelSpec, np.ndarray]:
+             effect: str | None = None, eq7_fit: bool | None = None) -> tuple[ModelSpec, np.ndarray]:
     """Fit the model (optionally with ``effect`` added) on ``stances``.
 
     The nonlinear parameters of effects already in ``spec`` stay as they are;
-    the joint-law coefficients are always re-fitted.
+    the joint-law coefficients are always re-fitted. ``eq7_fit``: the joint law subject to Eq. 7 or not
+    (None: :data:`EQ7_FIT`; the body-split nuisance search passes False, ``body_nuisance`` says why).
 
     Returns
     -------
@@ -355,17 +326,17 @@ def identify(spec: ModelSpec, trial: MeasuredTrial, stances: list[MeasuredStance
                 for f in ("secant", "tangent")]
         grid += [{"tau_s": t, "activation_shape": "bell", "activation_form": f} for t in BELL_GRID_S
                  for f in ("secant", "tangent")]
-        return _fit_timed(spec, stances, grid)
+        return _fit_timed(spec, stances, grid, eq7_fit)
     if effect == "active_push_off":
         grid = [{"onset_s": o, "duration_s": d} for o in ONSET_GRID_S for d in DURATION_GRID_S]
-        return _fit_timed(spec, stances, grid)
+        return _fit_timed(spec, stances, grid, eq7_fit)
     if effect == "surface_compliance":
         spec = fit_surfaces(spec, stances)
     elif effect == "force_plate_offset":
         spec = replace(spec, offset_n=fit_offset(stances))
     elif effect == "stream_latency":
         spec = replace(spec, latency_s=fit_latency(trial, stances, spec))
-    coefs, _ = fit_joint_law(spec, stances)
+    coefs, _ = fit_joint_law(spec, stances, eq7_fit)
     return spec, coefs
 
 

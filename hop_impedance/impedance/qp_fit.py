@@ -53,6 +53,22 @@ only when OSQP fails on the full problem. Only OSQP status ``solved`` counts as
 converged; anything else ("solved inaccurate", "maximum iterations reached",
 ...) is reported so the caller can reject the stance. ``theta = 0`` satisfies
 every row, so the problem is never primal infeasible.
+
+The exact path (:func:`exact_constrained_lstsq`, session 17)
+-------------------------------------------------------------
+The same problem solved exactly through NNLS (Lawson and Hanson's LSI -> LDP, ``scipy.optimize.nnls``), no
+tolerance, no workspace. It is the solver of discovery's Eq. 7 option (``discovery.identify.EQ7_FIT``): there the
+rows are K and B at every sample of up to 8 stances (726-2757 rows, 1-6 unknowns), zero-norm columns (hence
+rank-deficient designs) occur, and the fit must keep the rows to ~1e-9. :class:`ConstrainedLeastSquares` does not
+meet that: on 167 of those problems (every 20th of 3334 collected by ``bench/eq7_solver_fold.py --record``;
+``--compare --every 20``, session 17) 37 overflowed the 16-row working set to the full row set, which took up to 3.6
+s (44 s in all, the exact path 0.63 s), left a row at -8.2e-4 (K or B, N m/rad or N m s/rad; the exact path's worst
+-7.9e-9) and coefficients up to 0.20 (over max(1, |c|)) from the exact optimum; 14 had a zero-norm column, which
+:func:`scaled_problem` refuses. On the seed's own problems (Eqs. 7-9 rows, 28 synthetic stances;
+``--seed-problems``) the working set's objective is within 1.2e-12 (relative) of the exact one, the full-row path's
+once 8.2e-5 above it; the exact path took 0.4-21 ms, the full-row path 1.8-397 ms. The seed keeps OSQP's
+warm-started working set (its live path, its statuses and their tests); the exact solver is the reference
+``test_qp_fit.py`` checks it against.
 """
 
 from __future__ import annotations
@@ -65,6 +81,8 @@ from typing import Any
 import numpy as np
 import osqp
 from scipy import sparse
+from scipy.linalg import lstsq
+from scipy.optimize import nnls
 
 #: OSQP's algebra backend. Named explicitly: without it every ``osqp.OSQP()``
 #: tries to import the CUDA and MKL backends first (~1-2 ms per workspace).
@@ -209,6 +227,59 @@ def least_squares_objective(design: np.ndarray, target: np.ndarray, theta: np.nd
         return float("nan")
     residual = target - design @ theta
     return float(residual @ residual)
+
+
+def exact_constrained_lstsq(design: np.ndarray, target: np.ndarray, constraints: np.ndarray) -> np.ndarray:
+    """``argmin |target - design @ theta|^2`` subject to ``constraints @ theta >= 0``, exactly, through NNLS.
+
+    Lawson and Hanson's LSI -> LDP: with the thin SVD ``design = U S V^T`` (rank r; ``theta = V_r w``, the
+    minimum-norm reading of a rank-deficient design), ``z = S_r w - U_r^T target`` turns the problem into the
+    least-distance program ``min |z|`` subject to ``G z >= h``, ``G = constraints V_r S_r^-1`` (rows scaled to unit
+    norm, rows that vanish on the range dropped), ``h = -G U_r^T target``, whose solution is ``z = -r[:r] / r[r]``
+    with ``r = E u - e`` and ``u = nnls(E = [G^T; h^T], e = (0, ..., 0, 1))``. ``theta = 0`` is feasible, so the
+    program always has a solution. Polish: NNLS leaves the active rows at ~1e-9 of the coefficients' scale; the
+    least squares on the null space of the rows NNLS used (``u > 0``) hits them exactly and is kept when it keeps
+    every row and fits as well (a wrong active set would give a feasible but worse fit). Zero-norm columns get 0.
+    (Module docstring, "The exact path".)
+
+    Parameters
+    ----------
+    design : ndarray, shape (N, p)
+    target : ndarray, shape (N,)
+    constraints : ndarray, shape (m, p)
+
+    Returns
+    -------
+    ndarray, shape (p,)
+    """
+    x, y, rows = np.asarray(design, float), np.asarray(target, float), np.asarray(constraints, float)
+    u_mat, sv, vt = np.linalg.svd(x, full_matrices=False)
+    keep = sv > sv[0] * max(x.shape) * np.finfo(float).eps
+    u_mat, sv, v = u_mat[:, keep], sv[keep], vt[keep].T
+    d = u_mat.T @ y
+    g = (rows @ v) / sv
+    norms = np.linalg.norm(g, axis=1)
+    g, r_use = g[norms > 0], norms[norms > 0]
+    g = g / r_use[:, None]
+    h = -g @ d
+    e_mat = np.vstack([g.T, h[None, :]])
+    unit = np.zeros(len(sv) + 1)
+    unit[-1] = 1.0
+    u, _ = nnls(e_mat, unit, maxiter=50 * e_mat.shape[1])
+    r = e_mat @ u - unit
+    z = -r[:-1] / r[-1]
+    theta: np.ndarray = v @ ((z + d) / sv)
+    active = rows[norms > 0][u > 0]
+    if active.size:
+        _, sa, vta = np.linalg.svd(active)
+        null = vta[int(np.sum(sa > sa[0] * max(active.shape) * np.finfo(float).eps)):].T
+        if null.shape[1]:
+            polished = null @ lstsq(x @ null, y, lapack_driver="gelsy")[0]
+            scale = np.abs(rows) @ np.abs(polished)
+            as_good = np.sum((y - x @ polished) ** 2) <= np.sum((y - x @ theta) ** 2) * (1 + 1e-6) + 1e-12
+            if as_good and np.all(rows @ polished >= -1e-12 * np.maximum(scale, 1.0)):
+                theta = polished
+    return theta
 
 
 @dataclass(frozen=True)

@@ -58,3 +58,47 @@ def test_our_simulators_de_leva_body_keeps_the_table():
                                                         push_off=False))[0]
     _, choice = choose_body(rec, measure_trial(rec))
     assert abs(choice.fraction) < 0.05, choice.as_json()
+
+
+def _strict_null_35():
+    from hop_impedance.discovery.measurement import measure_trial as measure
+
+    rec, _ = strict_recording(StrictConfig(seed=35, hops=8))
+    return rec, measure(rec)
+
+
+def test_with_eq7_fit_the_table_body_clips_the_hip_stiffness_of_strict_null_35(monkeypatch):
+    """The mechanism of session 16's false activation, regression only: with the table's split the baseline's
+    unconstrained hip k0 is -221 N m/rad; Eq. 7's ``k0 >= 0`` row binds and the constrained fit puts it at 0, the
+    other joints unchanged. ``identify(..., eq7_fit=False)`` (the body search's call) gives the unconstrained one
+    whatever EQ7_FIT says."""
+    from hop_impedance.discovery import identify as identify_module
+    from hop_impedance.discovery.model import ModelSpec
+
+    _, trial = _strict_null_35()
+    monkeypatch.setattr(identify_module, "EQ7_FIT", False)
+    _, free = identify_module.identify(ModelSpec(), trial, trial.stances)
+    monkeypatch.setattr(identify_module, "EQ7_FIT", True)
+    _, fixed = identify_module.identify(ModelSpec(), trial, trial.stances)
+    _, search = identify_module.identify(ModelSpec(), trial, trial.stances, eq7_fit=False)
+    assert free[2, 0] == pytest.approx(-221.2, abs=0.5)
+    assert abs(fixed[2, 0]) < 1e-6
+    assert fixed[:2, 0] == pytest.approx(free[:2, 0], rel=1e-12)  # ankle 267.6, knee 269.8: no row binds
+    assert search[:, 0] == pytest.approx(free[:, 0], rel=1e-12)
+
+
+@pytest.mark.slow
+def test_eq7_fit_leaves_the_body_choice_of_strict_null_35_unchanged(monkeypatch):
+    """Session 17's fix: the body search identifies the baseline unconstrained also with EQ7_FIT. Before it, the
+    constrained hip k0 = 0 flattened the search's gap (0.92-1.16 over fractions up to 0.30 against 4.2-10.7
+    unconstrained), Brent stopped at 0.25 (gap 0.916 > half the table's 0.946), the table was kept and an activation
+    was named. Now both settings choose the same split, about 0.47 (gap 0.115)."""
+    from hop_impedance.discovery import identify as identify_module
+
+    rec, trial = _strict_null_35()
+    choices = []
+    for on in (False, True):
+        monkeypatch.setattr(identify_module, "EQ7_FIT", on)
+        choices.append(choose_body(rec, trial)[1])
+    assert choices[1].fraction == choices[0].fraction, [c.as_json() for c in choices]
+    assert choices[1].fraction > 0.4 and choices[1].gap_chosen < 0.2, choices[1].as_json()

@@ -17,6 +17,7 @@ from scipy.optimize import nnls
 
 from hop_impedance.discovery import identify
 from hop_impedance.discovery.model import ModelSpec, feature_names, stance_features
+from hop_impedance.impedance.qp_fit import exact_constrained_lstsq
 
 SPEC = ModelSpec(effects=("joint_damping",))
 K0 = np.array([300.0, 150.0, 120.0])
@@ -84,11 +85,11 @@ def test_passive_data_both_fits_agree(monkeypatch):
     assert sse_fixed == pytest.approx(sse_free, rel=1e-12)
 
 
-def test_constrained_lstsq_on_an_interior_optimum_matches_lstsq():
+def test_exact_constrained_lstsq_on_an_interior_optimum_matches_lstsq():
     rng = np.random.default_rng(3)
     x = rng.standard_normal((200, 3))
     c_true = np.array([1.0, 2.0, 3.0])
     y = x @ c_true + 0.01 * rng.standard_normal(200)
     rows = np.eye(3)  # c >= 0, inactive at the optimum
-    c = identify.constrained_lstsq(x, y, rows)
+    c = exact_constrained_lstsq(x, y, rows)
     np.testing.assert_allclose(c, np.linalg.lstsq(x, y, rcond=None)[0], rtol=0, atol=1e-8)

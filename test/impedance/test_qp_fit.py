@@ -271,3 +271,44 @@ def test_a_degenerate_working_set_is_solved_there_not_on_all_rows(monkeypatch):
             assert residual <= 1e-8 * np.linalg.norm(Xs.T @ ys)
         degenerate += active.size > A.shape[0] // 4
     assert degenerate >= 1  # the case is still in the recording (528 of 1051 rows active, measured)
+
+
+@pytest.mark.parametrize("joint,freq,seed", [("ankle", 2.20, 1), ("knee", 1.53, 3), ("hip", 2.20, 0)])
+def test_exact_path_and_osqp_give_the_same_fit_on_the_seeds_problems(joint, freq, seed):
+    """``exact_constrained_lstsq`` (NNLS, discovery's Eq. 7 solver) and the OSQP working set solve one problem.
+
+    Full model (Eqs. 7-9 rows): both keep every row, their objectives agree to 1e-9, and where the unconstrained
+    optimum breaks a row the exact fit is as good as OSQP's (session 17: 1.2e-12 at worst on 28 such stances).
+    """
+    from hop_impedance.impedance.qp_fit import exact_constrained_lstsq
+
+    stance = synthetic_stance(joint, freq, np.random.default_rng(seed), realistic_noise=True)
+    _, _, X, A = problem(stance)
+    y = stance.moment_nm
+    exact = exact_constrained_lstsq(X, y, A)
+    sol = ConstrainedLeastSquares().solve(X, y, A)
+    sse_exact = float(np.sum((y - X @ exact) ** 2))
+    assert sol.converged
+    assert (A @ exact).min() >= -1e-9 * float(np.abs(A).max() * np.abs(exact).max())
+    assert abs(sse_exact - sol.sse) <= 1e-9 * sol.sse
+    ols = np.linalg.lstsq(X, y, rcond=None)[0]
+    assert (A @ ols).min() < 0.0 and float(np.sum((y - X @ ols) ** 2)) < sse_exact  # the rows bind here
+
+
+def test_exact_path_takes_zero_and_dependent_columns():
+    """What ``scaled_problem`` refuses (a zero-norm column) the exact path solves: that column gets 0, and a copied
+    column splits its coefficient (the minimum-norm reading)."""
+    from hop_impedance.impedance.qp_fit import exact_constrained_lstsq
+
+    rng = np.random.default_rng(7)
+    x = rng.standard_normal((300, 2))
+    y = x @ np.array([2.0, -1.0]) + 0.01 * rng.standard_normal(300)
+    design = np.column_stack([x, np.zeros(300), x[:, 1]])  # zero column, and column 3 = column 1
+    rows = np.array([[0.0, 1.0, 0.0, 1.0]])  # the second term's total coefficient >= 0: binds (truth -1)
+    with pytest.raises(ValueError):
+        scaled = ConstrainedLeastSquares().solve(design, y, rows)  # noqa: F841
+    theta = exact_constrained_lstsq(design, y, rows)
+    assert theta[2] == 0.0
+    assert theta[1] == pytest.approx(theta[3], abs=1e-12) and rows @ theta == pytest.approx(0.0, abs=1e-12)
+    # with the second term held at 0 the optimum is the first column's own least squares
+    assert theta[0] == pytest.approx(float(x[:, 0] @ y / (x[:, 0] @ x[:, 0])), rel=1e-9)
