@@ -131,8 +131,9 @@ def main() -> None:
             tt = truth_channels(rec, fs.trial_for(spec), Path(args.truth), Path(args.recording).stem)
             show("truth per-hop law (in-sample, estimated M_td)", tt)
         d = np.log(np.sum(tc, axis=1)) - np.log(np.sum(ta, axis=1))
+        p_one = stats.ttest_1samp(d, 0, alternative="greater").pvalue
         print(f"log ratios {np.round(d, 3).tolist()} mean {d.mean():.3f} SD {d.std(ddof=1):.3f} "
-              f"t {d.mean() / (d.std(ddof=1) / np.sqrt(d.size)):.2f} p {stats.ttest_1samp(d, 0, alternative='greater').pvalue:.4f}")
+              f"t {d.mean() / (d.std(ddof=1) / np.sqrt(d.size)):.2f} p {p_one:.4f}")
         print(f"{args.recording} after [{args.after}] {args.candidate}: gate gaps current {np.mean(cur.gaps):.5f} "
               f"candidate {np.mean(cand.gaps):.5f} shrink {1 - np.mean(cand.gaps) / np.mean(cur.gaps):.3f} "
               f"p {fs.compare_gaps(cur.gaps, cand.gaps)[2]:.4g}")

@@ -42,9 +42,9 @@ every per-stance log gap ratio clipped to +-X, natural log units; log 10 = 2.302
 ``inf`` the uncapped test of sessions 1-15); ``--eq7-fit``: ``identify.EQ7_FIT`` (every joint law identified subject to
 seed 000's Eq. 7, K >= 0 and B >= 0 on the training samples; session 16's option, off by default);
 ``--touchdown-velocity-fit W``: ``forward_selection.TOUCHDOWN_VELOCITY_FIT_S`` (each model's touchdown velocities
-corrected on the stance's first W s of joint angles; session 17's option, off by default); ``--gate-per-signal``:
-``stiffness_gate.GATE_PER_SIGNAL`` (session 17's option, off by default); set in this process, so only without
-``--scheduler``. Run with
+corrected on the stance's first W s of joint angles; session 17's option, off by default); ``--gate-per-signal`` /
+``--no-gate-per-signal``: ``stiffness_gate.GATE_PER_SIGNAL`` (session 17; on by default since its end); set in this
+process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
 """
@@ -163,7 +163,10 @@ def main() -> None:
                          "on the stance's first W s (session 17's option)")
     ap.add_argument("--gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = True (session 17's option): the gate also passes a candidate "
-                         "significantly better on one sampled signal (Bonferroni over the 7) and worse on none")
+                         "significantly better on one sampled signal (Bonferroni over the 7) and worse on none; "
+                         "the default since the end of session 17")
+    ap.add_argument("--no-gate-per-signal", action="store_true",
+                    help="stiffness_gate.GATE_PER_SIGNAL = False: the gate of sessions 8-16 (the total gap only)")
     args = ap.parse_args()
     _configure_gate(ap, args)
     JSON_DIR[:] = [args.json_dir] if args.json_dir else []
@@ -195,42 +198,25 @@ def main() -> None:
 
 def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """The stiffness gate's options, set in this process (a Dask worker would not see them)."""
-    if args.surface_folds is not None:
-        if args.scheduler:
-            ap.error("--surface-folds is set in this process: run without --scheduler")
-        from hop_impedance.discovery import forward_selection
+    from hop_impedance.discovery import forward_selection, identify, stiffness_gate
 
-        forward_selection.SURFACE_FOLDS = args.surface_folds
-    if args.log_ratio_cap is not None:
+    # (flag, module, constant, value or None when not given): each set in this process, so not with --scheduler
+    for flag, module, name, value in (
+            ("--surface-folds", forward_selection, "SURFACE_FOLDS", args.surface_folds),
+            ("--log-ratio-cap", forward_selection, "LOG_RATIO_CAP", args.log_ratio_cap),
+            ("--eq7-fit", identify, "EQ7_FIT", True if args.eq7_fit else None),
+            ("--touchdown-velocity-fit", forward_selection, "TOUCHDOWN_VELOCITY_FIT_S", args.touchdown_velocity_fit),
+            ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
+            ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None)):
+        if value is None:
+            continue
         if args.scheduler:
-            ap.error("--log-ratio-cap is set in this process: run without --scheduler")
-        from hop_impedance.discovery import forward_selection
-
-        forward_selection.LOG_RATIO_CAP = args.log_ratio_cap
-    if args.eq7_fit:
-        if args.scheduler:
-            ap.error("--eq7-fit is set in this process: run without --scheduler")
-        from hop_impedance.discovery import identify
-
-        identify.EQ7_FIT = True
-    if args.touchdown_velocity_fit is not None:
-        if args.scheduler:
-            ap.error("--touchdown-velocity-fit is set in this process: run without --scheduler")
-        from hop_impedance.discovery import forward_selection
-
-        forward_selection.TOUCHDOWN_VELOCITY_FIT_S = args.touchdown_velocity_fit
-    if args.gate_per_signal:
-        if args.scheduler:
-            ap.error("--gate-per-signal is set in this process: run without --scheduler")
-        from hop_impedance.discovery import stiffness_gate
-
-        stiffness_gate.GATE_PER_SIGNAL = True
+            ap.error(f"{flag} is set in this process: run without --scheduler")
+        setattr(module, name, value)
     if args.gate_folds is None and args.gate_search is None and not args.gate_converge and not args.screen_uncorrected:
         return
     if args.scheduler:
         ap.error("--gate-* options set the gate in this process: run without --scheduler")
-    from hop_impedance.discovery import stiffness_gate
-
     if args.gate_folds is not None:
         stiffness_gate.FOLDS = args.gate_folds
     if args.gate_search:

@@ -36,7 +36,6 @@ outside file of ../shared/foreign; ``--simulator``: also a noise-free null of ou
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -48,8 +47,6 @@ from hop_impedance.discovery import measurement
 from hop_impedance.discovery.identify import touchdown_moments
 from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
 from hop_impedance.discovery.model import ModelSpec
-from hop_impedance.io.recording_io import load_recording
-from hop_impedance.simulation.ground import SURFACES
 from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, Effects
 from hop_impedance.simulation.sensors import SensorConfig, noise_free
 from hop_impedance.simulation.stance_set import RIGID_NO_BOUNCE, _stance_set_law, simulate_stance_set_recording
@@ -59,8 +56,7 @@ from discovery_truth_gap import (  # noqa: E402  (a sibling bench script)
     STRICT_GROUND,
     TOUCHDOWN_MOMENTS,
     fitted_law,
-    true_touchdown_moment,
-    truth_law,
+    outside_truth,
 )
 
 
@@ -123,20 +119,8 @@ def truth_state(truth: dict, rec, trial: MeasuredTrial) -> tuple[np.ndarray, np.
 
 
 def outside(path: Path, touchdown_moment: str = TOUCHDOWN_MOMENTS[0]) -> None:
-    rec = load_recording(path)
-    truth = json.loads(path.with_suffix(".truth.json").read_text())
-    latency = 0.0
-    if "stream_latency" in truth["effects"]:
-        latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
-    trial = measure_trial(rec, marker_latency_s=latency)
-    contacts, laws, grounds = [], [], []
-    for s in trial.stances:
-        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
-        contacts.append(((hop["t_td_ns"] - rec.start_ns) * 1e-9, (hop["t_to_ns"] - rec.start_ns) * 1e-9))
-        spec, coefs = truth_law(hop)
-        m_td = true_touchdown_moment(touchdown_moment, truth, hop, s, rec.start_ns, spec, coefs)
-        laws.append(fitted_law(touchdown_moment, spec, coefs, m_td, s))
-        grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else STRICT_GROUND)
+    rec, truth, trial, hops, laws, grounds = outside_truth(path, touchdown_moment)
+    contacts = [((h["t_td_ns"] - rec.start_ns) * 1e-9, (h["t_to_ns"] - rec.start_ns) * 1e-9) for h in hops]
     report(path.stem, trial, contacts, laws, grounds)
     (rho, omega), (rho_t, omega_t) = joint_state(trial), truth_state(truth, rec, trial)
     state_line("minus the truth's at the first sample", rho - rho_t, omega - omega_t)

@@ -31,7 +31,6 @@ Usage: .venv/bin/python bench/discovery_touchdown_sensitivity.py [--freq 1.53] [
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from dataclasses import replace
@@ -47,16 +46,14 @@ from hop_impedance.discovery import measurement
 from hop_impedance.discovery.identify import touchdown_moments
 from hop_impedance.discovery.measurement import measure_trial
 from hop_impedance.discovery.model import ModelSpec
-from hop_impedance.io.recording_io import load_recording
 from hop_impedance.simulation import stance_set as sset
 from hop_impedance.simulation.dynamics import chain_from_body_model
-from hop_impedance.simulation.ground import SURFACES
 from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, Effects
 from hop_impedance.simulation.sensors import SensorConfig, noise_free
 from hop_impedance.simulation.stance import simulate_stance
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from discovery_truth_gap import STRICT_GROUND, fitted_law, true_touchdown_moment, truth_law  # noqa: E402
+from discovery_truth_gap import fitted_law, outside_truth  # noqa: E402
 
 NULL = Effects(angle_dependent_stiffness=False, damping=False, push_off=False)
 def fitted_velocities(chain, law, ground, s) -> tuple:
@@ -110,20 +107,8 @@ def take_off_errors(trial, laws, grounds, window_s: float, label: str) -> None:
 
 
 def outside_fit(path: Path, window_s: float) -> None:
-    """:func:`take_off_errors` on an outside recording with its truth law (as ``discovery_stance_edges`` builds it)."""
-    rec = load_recording(path)
-    truth = json.loads(path.with_suffix(".truth.json").read_text())
-    latency = 0.0
-    if "stream_latency" in truth["effects"]:
-        latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
-    trial = measure_trial(rec, marker_latency_s=latency)
-    laws, grounds = [], []
-    for s in trial.stances:
-        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
-        spec, coefs = truth_law(hop)
-        laws.append(fitted_law("estimated", spec, coefs, true_touchdown_moment("estimated", truth, hop, s, rec.start_ns,
-                                                                              spec, coefs), s))
-        grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else STRICT_GROUND)
+    """:func:`take_off_errors` on an outside recording with its truth law (``discovery_truth_gap.outside_truth``)."""
+    _, _, trial, _, laws, grounds = outside_truth(path, "estimated")
     take_off_errors(trial, laws, grounds, window_s, path.stem)
 
 

@@ -106,6 +106,27 @@ def fitted_law(how: str, spec, coefs, m_td, s) -> FittedLaw:
     return FittedLaw(spec, coefs, m_td, identification_reference(s) if how == "estimated" else None)
 
 
+def outside_truth(path: Path, touchdown_moment: str) -> tuple:
+    """An outside recording measured as discovery measures it (the truth's marker latency removed) with, per stance,
+    its hop of the truth, the truth's law as a candidate would be simulated (``touchdown_moment``) and its ground.
+    Returns (recording, truth, trial, hops, laws, grounds)."""
+    rec = load_recording(path)
+    truth = json.loads(path.with_suffix(".truth.json").read_text())
+    latency = 0.0
+    if "stream_latency" in truth["effects"]:  # "marker content lags its stamps by 20.5 ms"
+        latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
+    trial = measure_trial(rec, marker_latency_s=latency)
+    hops, laws, grounds = [], [], []
+    for s in trial.stances:
+        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
+        spec, coefs = truth_law(hop)
+        m_td = true_touchdown_moment(touchdown_moment, truth, hop, s, rec.start_ns, spec, coefs)
+        hops.append(hop)
+        laws.append(fitted_law(touchdown_moment, spec, coefs, m_td, s))
+        grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else STRICT_GROUND)
+    return rec, truth, trial, hops, laws, grounds
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folder", nargs="?", default="../shared/foreign")
@@ -118,19 +139,7 @@ def main() -> None:
     folder = Path(args.folder)
     cases = args.cases or sorted(p.name[:-5] for p in folder.glob("*.mcap"))
     for case in cases:
-        rec = load_recording(folder / f"{case}.mcap")
-        truth = json.loads((folder / f"{case}.truth.json").read_text())
-        latency = 0.0
-        if "stream_latency" in truth["effects"]:  # "marker content lags its stamps by 20.5 ms"
-            latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
-        trial = measure_trial(rec, marker_latency_s=latency)
-        laws, grounds = [], []
-        for s in trial.stances:
-            hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
-            spec, coefs = truth_law(hop)
-            m_td = true_touchdown_moment(args.touchdown_moment, truth, hop, s, rec.start_ns, spec, coefs)
-            laws.append(fitted_law(args.touchdown_moment, spec, coefs, m_td, s))
-            grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else STRICT_GROUND)
+        rec, truth, trial, hops, laws, grounds = outside_truth(folder / f"{case}.mcap", args.touchdown_moment)
         offset = 0.0
         if "force_plate_offset" in truth["effects"]:  # "constant +25.5 N added to force.z"
             offset = float(truth["effect_details"]["force_plate_offset"].split()[1])

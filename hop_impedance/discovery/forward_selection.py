@@ -281,6 +281,7 @@ def velocity_window_residual(chain, law, ground, s: MeasuredStance, d: np.ndarra
     """Residual of the velocity fit at change ``d`` (scaled units, :data:`VELOCITY_SCALE`): simulated minus measured
     joint angles over the first :data:`TOUCHDOWN_VELOCITY_FIT_S` of the stance (in :data:`VELOCITY_FIT_ANGLE_RAD`,
     over sqrt(samples)), then the prior (``d`` over :data:`VELOCITY_PRIOR`)."""
+    assert TOUCHDOWN_VELOCITY_FIT_S is not None, "the velocity fit needs forward_selection.TOUCHDOWN_VELOCITY_FIT_S"
     window = float(TOUCHDOWN_VELOCITY_FIT_S)
     win = s.t_s <= window
     tw, rho = s.t_s[win], s.rho_rad[win]
