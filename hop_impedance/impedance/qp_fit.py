@@ -60,12 +60,12 @@ The same problem solved exactly through NNLS (Lawson and Hanson's LSI -> LDP, ``
 tolerance, no workspace. It is the solver of discovery's Eq. 7 option (``discovery.identify.EQ7_FIT``): there the
 rows are K and B at every sample of up to 8 stances (726-2757 rows, 1-6 unknowns), zero-norm columns (hence
 rank-deficient designs) occur, and the fit must keep the rows to ~1e-9. :class:`ConstrainedLeastSquares` does not
-meet that: on 167 of those problems (every 20th of 3334 collected by ``bench/eq7_solver_fold.py --record``;
-``--compare --every 20``, session 17) 37 overflowed the 16-row working set to the full row set, which took up to 3.6
+meet that: on 167 of those problems (every 20th of 3334 collected and compared by ``bench/eq7_solver_fold.py``,
+session 17) 37 overflowed the 16-row working set to the full row set, which took up to 3.6
 s (44 s in all, the exact path 0.63 s), left a row at -8.2e-4 (K or B, N m/rad or N m s/rad; the exact path's worst
 -7.9e-9) and coefficients up to 0.20 (over max(1, |c|)) from the exact optimum; 14 had a zero-norm column, which
-:func:`scaled_problem` refuses. On the seed's own problems (Eqs. 7-9 rows, 28 synthetic stances;
-``--seed-problems``) the working set's objective is within 1.2e-12 (relative) of the exact one, the full-row path's
+:func:`scaled_problem` refuses. On the seed's own problems (Eqs. 7-9 rows, 28 synthetic stances; the same
+bench's seed-problems mode) the working set's objective is within 1.2e-12 (relative) of the exact one, the full-row path's
 once 8.2e-5 above it; the exact path took 0.4-21 ms, the full-row path 1.8-397 ms. The seed keeps OSQP's
 warm-started working set (its live path, its statuses and their tests); the exact solver is the reference
 ``test_qp_fit.py`` checks it against.
