@@ -11,12 +11,12 @@ constrained path (every ``fit_joint_law`` joint whose unconstrained optimum brea
 - ``--seed-problems``: the seed's own problems (synthetic stances, Eqs. 7-9 rows): per stance the time, the
   objective relative to the exact path's and the smallest row over ``|rows| @ |c|`` of OSQP's working set, OSQP's
   full row set and the exact path;
-- ``--compare DIR``: per saved problem session 16's solver (a verbatim copy of ``identify.constrained_lstsq``,
-  :func:`old_nnls`), ``qp_fit.exact_constrained_lstsq`` (session 17: the same, moved) and
-  ``ConstrainedLeastSquares.solve`` (zero-norm columns dropped for it, it raises on them; their coefficient set to
-  0); printed: the largest coefficient difference over ``max(1, |c|)``, OSQP's
-  objective relative to the NNLS one, the smallest row value ``min(rows @ c)`` (K or B, N m/rad or N m s/rad), the
-  time, how often OSQP fell back to the full row set or did not converge.
+- ``--compare DIR``: per saved problem ``qp_fit.exact_constrained_lstsq`` (session 16's ``identify.constrained_lstsq``,
+  moved in session 17: the largest coefficient difference to the copy this bench kept then was 0.0; the copy is gone,
+  ``git show 1467d67:hop_impedance/discovery/identify.py`` has it) and ``ConstrainedLeastSquares.solve`` (zero-norm
+  columns dropped for it, it raises on them; their coefficient set to 0); printed: the largest coefficient
+  difference over ``max(1, |c|)``, OSQP's objective relative to the NNLS one, the smallest row value
+  ``min(rows @ c)`` (K or B, N m/rad or N m s/rad), the time, how often OSQP fell back to the full row set or did not converge.
 
 Usage::
 
@@ -82,48 +82,14 @@ def record(args) -> None:
         print(f"{label}: {count[0] - before} constrained problems", flush=True)
 
 
-def old_nnls(x, y, rows):
-    """Session 16's ``identify.constrained_lstsq`` (kept here, verbatim, as the reference of the fold)."""
-    from scipy.linalg import lstsq
-    from scipy.optimize import nnls
-
-    u_mat, sv, vt = np.linalg.svd(x, full_matrices=False)
-    keep = sv > sv[0] * max(x.shape) * np.finfo(float).eps
-    u_mat, sv, v = u_mat[:, keep], sv[keep], vt[keep].T
-    d = u_mat.T @ y
-    g = (rows @ v) / sv
-    norms = np.linalg.norm(g, axis=1)
-    g, r_use = g[norms > 0], norms[norms > 0]
-    g = g / r_use[:, None]
-    h = -g @ d
-    e_mat = np.vstack([g.T, h[None, :]])
-    target = np.zeros(len(sv) + 1)
-    target[-1] = 1.0
-    u, _ = nnls(e_mat, target, maxiter=50 * e_mat.shape[1])
-    r = e_mat @ u - target
-    z = -r[:-1] / r[-1]
-    c = v @ ((z + d) / sv)
-    active = rows[norms > 0][u > 0]
-    if active.size:
-        _, sa, vta = np.linalg.svd(active)
-        null = vta[int(np.sum(sa > sa[0] * max(active.shape) * np.finfo(float).eps)):].T
-        if null.shape[1]:
-            polished = null @ lstsq(x @ null, y, lapack_driver="gelsy")[0]
-            scale = np.abs(rows) @ np.abs(polished)
-            as_good = np.sum((y - x @ polished) ** 2) <= np.sum((y - x @ c) ** 2) * (1 + 1e-6) + 1e-12
-            if as_good and np.all(rows @ polished >= -1e-12 * np.maximum(scale, 1.0)):
-                c = polished
-    return c
-
-
 def compare(args) -> None:
     from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares, exact_constrained_lstsq
 
     files = sorted(Path(args.compare).glob("*.npz"))[::args.every]
     osqp_solver = ConstrainedLeastSquares()
     shapes, zero_cols, rank_def = [], 0, 0
-    stats = {k: [] for k in ("new_vs_old", "osqp_vs_old", "sse_osqp_rel", "min_row_old", "min_row_new",
-                             "min_row_osqp", "t_old", "t_new", "t_osqp", "osqp_fallback", "osqp_unconverged")}
+    stats = {k: [] for k in ("osqp_vs_exact", "sse_osqp_rel", "min_row_exact", "min_row_osqp", "t_exact", "t_osqp",
+                             "osqp_fallback", "osqp_unconverged")}
     for f in files:
         d = np.load(f)
         x, y, rows = d["x"], d["y"], d["rows"]
@@ -131,8 +97,6 @@ def compare(args) -> None:
         zero = np.linalg.norm(x, axis=0) == 0
         zero_cols += bool(zero.any())
         rank_def += np.linalg.matrix_rank(x) < x.shape[1]
-        t0 = time.perf_counter()
-        c_old = old_nnls(x, y, rows)
         t1 = time.perf_counter()
         c_new = exact_constrained_lstsq(x, y, rows)
         t2 = time.perf_counter()
@@ -146,18 +110,15 @@ def compare(args) -> None:
         except ValueError:
             c_osqp = np.full(x.shape[1], np.nan)
         t3 = time.perf_counter()
-        scale = max(np.abs(c_old).max(), np.abs(c_osqp).max() if np.isfinite(c_osqp).all() else 0.0, 1.0)
+        scale = max(np.abs(c_new).max(), np.abs(c_osqp).max() if np.isfinite(c_osqp).all() else 0.0, 1.0)
         def sse(c, x=x, y=y):
             return float(np.sum((y - x @ c) ** 2))
 
-        stats["new_vs_old"].append(np.abs(c_new - c_old).max() / scale)
-        stats["osqp_vs_old"].append(np.abs(c_osqp - c_old).max() / scale)
-        stats["sse_osqp_rel"].append(sse(c_osqp) / max(sse(c_old), 1e-300) - 1)
-        stats["min_row_old"].append(float(np.min(rows @ c_old)))
-        stats["min_row_new"].append(float(np.min(rows @ c_new)))
+        stats["osqp_vs_exact"].append(np.abs(c_osqp - c_new).max() / scale)
+        stats["sse_osqp_rel"].append(sse(c_osqp) / max(sse(c_new), 1e-300) - 1)
+        stats["min_row_exact"].append(float(np.min(rows @ c_new)))
         stats["min_row_osqp"].append(float(np.min(rows @ c_osqp)))
-        stats["t_old"].append(t1 - t0)
-        stats["t_new"].append(t2 - t1)
+        stats["t_exact"].append(t2 - t1)
         stats["t_osqp"].append(t3 - t2)
     print(f"{len(files)} problems; rows {min(r[0] for _, r in shapes)}-{max(r[0] for _, r in shapes)}, "
           f"unknowns {min(s[1] for s, _ in shapes)}-{max(s[1] for s, _ in shapes)}; with a zero-norm column "
