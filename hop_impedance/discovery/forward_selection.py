@@ -48,7 +48,7 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -314,10 +314,8 @@ def reference_velocity_jacobian(chain, s: MeasuredStance, step: float = 1e-2) ->
 
 
 def chain_key(chain) -> bytes:
-    """The body's parameters as bytes (a cache key)."""
-    names = ("mass_kg", "length_m", "com_along_m", "com_perp_m", "inertia_kgm2", "alpha_rad", "heel_along_m",
-             "heel_perp_m", "gravity_m_s2", "toe_marker_along_m", "toe_marker_perp_m")
-    return np.concatenate([np.ravel(np.asarray(getattr(chain, n), float)) for n in names]).tobytes()
+    """The body's parameters (its dataclass fields; not its cached derived terms) as bytes (a cache key)."""
+    return np.concatenate([np.ravel(np.asarray(getattr(chain, f.name), float)) for f in fields(chain)]).tobytes()
 
 
 def take_off_level_n(trial: MeasuredTrial) -> float:

@@ -99,6 +99,7 @@ from scipy.optimize import minimize
 
 from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery.body_nuisance import FAILED_GAP
+from hop_impedance.discovery.forward import GAP_SIGNALS
 from hop_impedance.discovery.identify import identify
 from hop_impedance.discovery.model import JOINT_EFFECTS, ModelSpec, feature_names
 
@@ -153,8 +154,8 @@ SHOOT_EFFECT_SIZE = False
 #: the outside files 5/8 exact against 4/8, 0/6 false, 0 steps not shrinking (``bench/discovery_hit_rates.py --foreign
 #: ../shared/foreign --gate-per-signal``). False: sessions 8-16's gate.
 GATE_PER_SIGNAL = True
-#: The sampled signals :data:`GATE_PER_SIGNAL` tests (the first seven terms of a stance's gap).
-N_SIGNALS = 7
+#: How many sampled signals :data:`GATE_PER_SIGNAL` tests (:data:`GAP_SIGNALS`, the first terms of a stance's gap).
+N_SIGNALS = len(GAP_SIGNALS)
 #: Stop when a step moves every parameter by less than STEP_TOL, or an accepted step's gain (after a rejected
 #: trial: the linearisation's predicted gain) is less than GAP_TOL of the gap; Nelder-Mead: simplex within
 #: STEP_TOL and NM_FATOL (None: GAP_TOL of the start's gap) of its best point. The defaults since session 12 are
@@ -522,8 +523,6 @@ def per_signal_test(current: np.ndarray, cand: np.ndarray, shrink: float, n_cand
     :func:`hop_impedance.discovery.forward_selection.capped`), one-sided t-tests both ways. Passes when some signal's
     "better" p is below ALPHA / (n_candidates * N_SIGNALS), no signal's "worse" p is below ALPHA, and the pooled
     total gap shrinks by MIN_SHRINK (``shrink``)."""
-    from hop_impedance.discovery.forward import GAP_SIGNALS
-
     with np.errstate(divide="ignore", invalid="ignore"):
         cur = np.where(np.isfinite(current), current, np.inf)
         can = np.where(np.isfinite(cand), cand, np.inf)
