@@ -154,7 +154,7 @@ def _print_dropped_inputs(report) -> None:
 
 def _exit_code(report, counts: dict[str, int], tolerate_loss: bool) -> int:
     """Print the input-check lines and the run's end state; the exit code :func:`print_report` documents."""
-    from hop_impedance.nodes.runner import messages_lost
+    from hop_impedance.nodes.runner import STOP_GRACE_S, messages_lost
 
     code = 0
     for note in input_notes(report):
@@ -168,6 +168,11 @@ def _exit_code(report, counts: dict[str, int], tolerate_loss: bool) -> int:
         return 1
     if not report.finished:
         _problem("error: did not finish in time (see the losses above and the logs)")
+        return 1
+    for name in report.killed:
+        _problem(f"warning: node {name} did not exit within {STOP_GRACE_S:.0f} s of SIGINT and was killed")
+    if report.recorder_shortfall:
+        _problem("error: the output file lacks messages the recorder received: " + "; ".join(report.recorder_shortfall))
         return 1
     lost = messages_lost(report, counts)
     if lost and not tolerate_loss:

@@ -134,6 +134,10 @@ class PipelineReport:
     interrupted: bool = False
     #: Where reading the recording stopped (a truncated or damaged file), one line each.
     input_warnings: list = field(default_factory=list)
+    #: ``--processes``: node processes that did not exit within :data:`STOP_GRACE_S` of SIGINT and were killed.
+    killed: list = field(default_factory=list)
+    #: Messages the recorder received but its file lacks (:func:`recorder_shortfall`), one line per topic.
+    recorder_shortfall: list = field(default_factory=list)
 
     def received(self, node: str, topic: str) -> int:
         """Messages of ``topic`` the node ``node`` reported received (0 if unknown)."""
@@ -212,6 +216,7 @@ def run_pipeline(cfg: PipelineConfig) -> PipelineReport:
     Path(cfg.out_dir).mkdir(parents=True, exist_ok=True)
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     report = _run_processes(cfg) if cfg.processes else _run_in_process(cfg)
+    report.recorder_shortfall = recorder_shortfall(report)
     if stopped:
         report.input_warnings.append(f"{Path(cfg.recording).name}: {stopped}; replayed up to there")
     return report
@@ -393,18 +398,54 @@ def start_children(names, cfg: PipelineConfig, log_dir: Path) -> dict[str, subpr
     return children
 
 
-def stop_children(children: dict[str, subprocess.Popen], grace_s: float = 5.0) -> None:
-    """SIGINT every child (nodes exit cleanly, the recorder finishes its file), then SIGKILL stragglers."""
+#: Seconds a node process gets to exit after SIGINT before it is killed. On a quiet machine every node exits in
+#: well under one; the recorder finishes its file on the way out, and a kill loses the chunk in progress (up to its
+#: last 0.5 s flush). Sessions 1-17 gave 5 s; a CI run under load (session 17, load 5-8) found the file one stance
+#: summary short of the ten the recorder had acknowledged, as a kill inside that grace would leave it. A longer grace
+#: costs nothing when the nodes exit, and :func:`recorder_shortfall` catches a short file whatever the cause.
+STOP_GRACE_S = 20.0
+
+
+def stop_children(children: dict[str, subprocess.Popen], grace_s: float = STOP_GRACE_S) -> list[str]:
+    """SIGINT every child (nodes exit cleanly, the recorder finishes its file), then SIGKILL stragglers.
+
+    Returns the names of the children that had to be killed.
+    """
     for p in children.values():
         if p.poll() is None:
             p.send_signal(signal.SIGINT)
     deadline = time.monotonic() + grace_s
-    for p in children.values():
+    killed = []
+    for name, p in children.items():
         try:
             p.wait(timeout=max(0.1, deadline - time.monotonic()))
         except subprocess.TimeoutExpired:
             p.kill()
             p.wait()
+            killed.append(name)
+    return killed
+
+
+def recorder_shortfall(report: PipelineReport, path: str | None = None) -> list[str]:
+    """Topics of which the recorder's file holds fewer messages than the recorder acknowledged receiving.
+
+    The acknowledgement is the recorder's last ``/pipeline/progress`` (a lower bound: it may lag the last
+    messages), so any shortfall is a loss between the recorder's callback and the disk (a killed recorder, a file
+    not finished). One line per topic: ``"<topic>: <n> in <file> of <m> the recorder received"``; empty when the
+    file holds everything or the run had no recorder.
+    """
+    from hop_impedance.io.mcap_io import summarize
+
+    path = path or report.output_mcap
+    progress = report.progress.get("/recorder")
+    if progress is None or not path or not Path(path).exists():
+        return []
+    in_file = {i.topic: i.count for i in summarize(path)}
+    out = []
+    for topic, received in zip(progress.topics, progress.received):
+        if in_file.get(topic, 0) < int(received):
+            out.append(f"{topic}: {in_file.get(topic, 0)} in {Path(path).name} of {int(received)} the recorder received")
+    return out
 
 
 def ready_subscriptions(cfg: PipelineConfig) -> dict[str, int]:
@@ -489,12 +530,13 @@ def _run_processes(cfg: PipelineConfig) -> PipelineReport:
             _spin_until_done(executor, collector, cfg, t0, alive)
         report = collector.report
     finally:
-        stop_children(children)
+        killed = stop_children(children)
         collector.destroy_node() if "collector" in locals() else None
         context.try_shutdown()  # already shut down after Ctrl-C
     report.wall_s = time.monotonic() - t0
     report.output_mcap = cfg.output_mcap
     report.rrd = str(cfg.rerun_save or "")
+    report.killed = killed
     return report
 
 

@@ -228,3 +228,33 @@ def test_seeded_loss_under_processes_every_stance_has_a_row_in_table_json_and_mc
         assert all(r["accepted"]) or r["rejection_reason"]
         if r["force_samples_lost_in_stance"]:
             assert "message loss" in r["rejection_reason"] and not any(r["accepted"])
+
+
+def test_output_file_short_of_what_the_recorder_received_is_an_error(tmp_path, capfd):
+    """A file that lacks messages the recorder acknowledged (a killed recorder, a file cut short) is named, exit 1.
+
+    The intact run holds everything; its file cut to 60 % of its bytes (read to the break) holds fewer stance
+    summaries than the recorder's last progress acknowledged, and the check says which topic and how many.
+    """
+    import shutil
+
+    from hop_impedance.io.mcap_io import summarize
+    from hop_impedance.nodes.common import SUMMARY_TOPIC
+    from hop_impedance.nodes.runner import recorder_shortfall
+
+    report, code, text = _run(bad.BUNDLED, tmp_path / "out", capfd)
+    assert code == 0 and report.recorder_shortfall == [] and report.killed == []
+    acknowledged = report.received("/recorder", SUMMARY_TOPIC)
+    assert acknowledged == len(report.summaries) == 10
+    cut = tmp_path / "cut.mcap"
+    shutil.copy(report.output_mcap, cut)
+    with open(cut, "r+b") as fh:
+        fh.truncate(int(0.6 * cut.stat().st_size))
+    kept = {i.topic: i.count for i in summarize(cut)}.get(SUMMARY_TOPIC, 0)
+    assert kept < acknowledged
+    lines = recorder_shortfall(report, str(cut))
+    assert f"{SUMMARY_TOPIC}: {kept} in cut.mcap of {acknowledged} the recorder received" in lines
+    report.recorder_shortfall = lines
+    assert print_report(report, str(bad.BUNDLED)) == 1
+    err = capfd.readouterr().err
+    assert "error: the output file lacks messages the recorder received: " in err and SUMMARY_TOPIC in err

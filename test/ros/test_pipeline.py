@@ -49,6 +49,8 @@ def test_separate_processes_match_offline_analyze(tmp_path, offline):
     report = run_pipeline(PipelineConfig(REC, str(tmp_path), rate=0.0, processes=True, timeout_s=90,
                                          overrides={"impedance_estimator": given}))
     assert report.finished
+    # every node exited on SIGINT and the recorder's file holds all it received (session 17's CI under load: 9 of 10)
+    assert report.killed == [] and report.recorder_shortfall == []
     complete = [s for s in offline["stances"] if s["complete"]]
     # exactly one summary (profile or rejection) per complete stance, three profiles each
     assert len(report.summaries) == len(complete) == 10
