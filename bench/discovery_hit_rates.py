@@ -97,10 +97,11 @@ CASES = {
 #: Second generator (hop_impedance.validation.strict_generator): strict family, lossless, time-symmetric.
 STRICT_CASES = {
     "null": StrictConfig(),
-    # k1 = 0.8 k0 per rad about mid-stance: K at touchdown is 0.35 / 0.66 / 0.91 of mid-stance's at the ankle / knee /
-    # hip (medians, seeds 0-3; seed 000's Table 2 at 2.2 Hz: 0.35 / 0.49 / 0.64); 3.0, the first session's, made K
-    # negative at touchdown and no stance a plausible hop (generation failed in every run)
-    "angle_dependent_stiffness": StrictConfig(angle_k1=0.8),
+    # k1 = 2.5 k_td per rad referenced to touchdown (seed 000's Eq. 10; the generator's default since session 18): K at
+    # touchdown is 0.33 / 0.49 / 0.77 of mid-stance's at the ankle / knee / hip (medians, seeds 0-3; seed 000's Table 2
+    # at 2.2 Hz: 0.35 / 0.49 / 0.64). Sessions 15-17: k1 = 0.8 k0 per rad about mid-stance (0.35 / 0.66 / 0.91), whose
+    # touchdown stiffness varied from stance to stance with the stance's flexion, unlike seed 000's law: 0/3 named
+    "angle_dependent_stiffness": StrictConfig(angle_k1=2.5),
     "force_plate_offset": StrictConfig(force_offset_n=30.0),
     "stream_latency": StrictConfig(marker_latency_s=0.015),
 }
@@ -161,6 +162,8 @@ def main() -> None:
     ap.add_argument("--touchdown-velocity-fit", type=float, default=None, metavar="W",
                     help="forward_selection.TOUCHDOWN_VELOCITY_FIT_S = W: each model's touchdown velocities corrected "
                          "on the stance's first W s (session 17's option)")
+    ap.add_argument("--angle-terms", default=None, metavar="TERMS",
+                    help="model.ANGLE_TERMS, e.g. k1 (seed 000's Eq. 10) or k1,k2 (Eq. 3, the default)")
     ap.add_argument("--gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = True (session 17's option): the gate also passes a candidate "
                          "significantly better on one sampled signal (Bonferroni over the 7) and worse on none; "
@@ -198,7 +201,7 @@ def main() -> None:
 
 def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """The stiffness gate's options, set in this process (a Dask worker would not see them)."""
-    from hop_impedance.discovery import forward_selection, identify, stiffness_gate
+    from hop_impedance.discovery import forward_selection, identify, model, stiffness_gate
 
     # (flag, module, constant, value or None when not given): each set in this process, so not with --scheduler
     for flag, module, name, value in (
@@ -206,6 +209,7 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--log-ratio-cap", forward_selection, "LOG_RATIO_CAP", args.log_ratio_cap),
             ("--eq7-fit", identify, "EQ7_FIT", True if args.eq7_fit else None),
             ("--touchdown-velocity-fit", forward_selection, "TOUCHDOWN_VELOCITY_FIT_S", args.touchdown_velocity_fit),
+            ("--angle-terms", model, "ANGLE_TERMS", tuple(args.angle_terms.split(",")) if args.angle_terms else None),
             ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
             ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None)):
         if value is None:

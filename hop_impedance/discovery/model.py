@@ -133,11 +133,20 @@ class ModelSpec:
         return name in self.effects
 
 
+#: Terms the angle-dependent stiffness adds to ``k0``: seed 000's Eq. 3 ``k1``, ``k2`` (sessions 1-17, the default)
+#: or its reduced Eq. 10 ``K = k0 + k1 (rho - rho0)`` (``("k1",)``, session 18's option, off). Why the option: on the
+#: second generator's touchdown-referenced angle law (K from 0.33 of its mid-stance value at the ankle) the pooled
+#: fit on the stances' cores with ``k2`` extrapolates K at touchdown badly (seed 1: ankle 269 - 235 d + 264 d^2 against
+#: the truth's 86 + 215 d; k0 + k1 alone: 160 + 109 d), and at the hip, whose 0.07-0.2 rad of flexion leave the
+#: ID moment's body errors (8-24 N m RMS) to dominate, k1/k2 come out at +-1e4..2e5 and the simulation blows up.
+ANGLE_TERMS: tuple[str, ...] = ("k1", "k2")
+
+
 def elastic_terms(spec: ModelSpec) -> tuple[str, ...]:
     """Names of the elastic regressors of the joint law."""
     names: tuple[str, ...] = ("k0",)
     if spec.has("angle_dependent_stiffness"):
-        names += ("k1", "k2")
+        names += ANGLE_TERMS
     if spec.has("rate_dependent_stiffness"):
         names += ("k3",)
     return names

@@ -100,16 +100,40 @@ def test_angle_dependent_stiffness_stays_a_stiffness_over_every_stance():
     stiffness at touchdown, ``k0 - k1 R``, is positive in every hop (the ankle's falls to 3-7 % of mid-stance's in
     seeds 0-3); with ``k1 = 1.5 k0`` it would be negative at the ankle (R 0.8-0.9 rad), and the generator refuses
     to draw such a stance instead of writing it (before: it wrote K down to -0.47 k0 at touchdown)."""
-    _, truth = strict_recording(StrictConfig(hops=3, seed=1, angle_k1=1.0))
+    _, truth = strict_recording(StrictConfig(hops=3, seed=1, angle_k1=1.0, angle_reference="mid-stance"))
     k_td = np.array([np.array(h["k0"]) - np.array(h["k1"]) * np.array(h["flex_mid_rad"]) for h in truth["per_hop"]])
     k1 = np.array([h["k1"] for h in truth["per_hop"]])
     assert np.all(k1 > 0.0)
     assert np.all(k_td > 0.0)
     # the hit-rate bench's size (bench/discovery_hit_rates.py STRICT_CASES): the ankle's K at touchdown is about a
     # third of its K at mid-stance, as in seed 000's Table 2 at 2.2 Hz (301 / (301 + 948 x 0.59) = 0.35)
-    _, truth = strict_recording(StrictConfig(hops=4, seed=0, angle_k1=0.8))
+    _, truth = strict_recording(StrictConfig(hops=4, seed=0, angle_k1=0.8, angle_reference="mid-stance"))
     ratio = np.array([1.0 - 0.8 * np.array(h["flex_mid_rad"]) for h in truth["per_hop"]])
     assert 0.25 < np.median(ratio[:, 0]) < 0.45
     assert np.all(ratio > 0.0)
     with pytest.raises(ValueError, match="no plausible stance"):
-        strict_recording(StrictConfig(hops=1, seed=1, angle_k1=1.5))
+        strict_recording(StrictConfig(hops=1, seed=1, angle_k1=1.5, angle_reference="mid-stance"))
+
+
+def test_touchdown_referenced_angle_law_has_one_touchdown_stiffness_per_recording():
+    """Seed 000's Eq. 10 references k1 to the start of the stance; so does the default since session 18.
+
+    The stiffness at touchdown ``k0 - k1 phi_mid`` (``k0`` the mid-stance form's, per stance) is the same number in
+    every stance to 1e-6 N m/rad (the fixed point over ``phi_mid`` converged), ``k1 = 2.5 k_td`` per rad, and the
+    touchdown-to-mid-stance ratio is seed-like at the ankle and knee (seed 000's Table 2 at 2.2 Hz: 0.35 / 0.49 / 0.64);
+    K grows from touchdown, so it stays positive. The null is the same recording as before (k1 = 0 takes no iteration).
+    """
+    _, truth = strict_recording(StrictConfig(hops=4, seed=2, angle_k1=2.5))
+    k0, k1, pm = (np.array([h[k] for h in truth["per_hop"]]) for k in ("k0", "k1", "flex_mid_rad"))
+    k_td = k0 - k1 * pm
+    assert np.ptp(k_td, axis=0).max() < 1e-6
+    np.testing.assert_allclose(k1, 2.5 * k_td, rtol=1e-8)
+    ratio = np.median(k_td / k0, axis=0)
+    assert 0.28 < ratio[0] < 0.40 and 0.42 < ratio[1] < 0.56 and 0.6 < ratio[2] < 0.9
+    assert np.all(k_td > 0.0)
+    # a typical stance's mid-stance stiffness stays the recording's k0 (PHI_MID_TYPICAL scales k_td): within 15 %
+    _, t_null = strict_recording(StrictConfig(hops=1, seed=2))  # the recording's k0 is drawn before any stance
+    k_null = np.array(t_null["per_hop"][0]["k0"])
+    assert np.all(np.abs(np.median(k0, axis=0) / k_null - 1.0) < 0.15)
+    with pytest.raises(ValueError, match="angle_reference"):
+        strict_recording(StrictConfig(hops=1, seed=1, angle_k1=1.0, angle_reference="take-off"))

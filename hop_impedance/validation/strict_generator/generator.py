@@ -12,6 +12,11 @@ Joint law (extensor moment, conservative): ``M_j = M_mid_j + k0_j dphi + k1_j dp
 ``Fz = K_GROUND |z_toe|^1.5`` for ``z_toe < 0`` (no damper). With ``k1 = 0`` this is the strict
 baseline ``M = M_td + K phi`` of the outside generator; ``k1 > 0`` is an angle-dependent stiffness
 (stiffness ``k0 + k1 dphi`` kept >= 0 over the stance, seed 000's Eq. 7: a draw that breaks it is re-drawn).
+Where ``k1`` is referenced (``StrictConfig.angle_reference``): at touchdown, as seed 000's Eq. 10 (``rho_j0`` "at
+the beginning of the stance phase") and the outside generator have it, the stiffness at touchdown ``k0 - k1 phi_mid``
+is one number per recording and joint; the mid-stance form above then carries a per-stance ``k0`` that is found by a
+fixed-point iteration over ``phi_mid`` (:func:`_stance`). Sessions 15-17 referenced ``k1`` to mid-stance (one ``k0``
+there per recording, so the touchdown stiffness varied from stance to stance with ``phi_mid``).
 
 Equations of motion: segment centre-of-mass positions and angles are written in ``q`` with sympy; the
 mass matrix is ``sum m J^T J + I j^T j`` and the velocity term ``sum m J^T (dJ/dt qd) + ...`` (Kane's
@@ -72,11 +77,16 @@ class StrictConfig:
     hops : int
     seed : int
     angle_k1 : float
-        Angle-dependent stiffness ``k1 = angle_k1 * k0`` (1/rad) on every joint (0 = strict baseline).
-        ``k1`` is referenced to mid-stance (maximal flexion), so the stiffness falls towards touchdown and
-        take-off, ``K = k0 (1 - angle_k1 R)`` at an extension ``R`` from mid-stance; a draw in which ``K``
-        turns negative anywhere in the stance (against seed 000's Eq. 7) is re-drawn, so ``angle_k1`` must
-        stay below ``1 / R`` of the joint that moves most (the ankle, R 0.8-0.9 rad here).
+        Angle-dependent stiffness (1/rad) on every joint (0 = strict baseline); its reference is ``angle_reference``.
+    angle_reference : str
+        ``"touchdown"`` (the default since session 18; seed 000's Eq. 10): ``K = k_td (1 + angle_k1 phi)`` with
+        ``phi`` the flexion from touchdown and ``k_td = k0 / (1 + angle_k1 PHI_MID_TYPICAL)`` one number per
+        recording and joint (so that the mid-stance stiffness of a typical stance stays the recording's ``k0``,
+        as in the strict null); ``K`` grows from touchdown to mid-stance and stays > 0. ``"mid-stance"``
+        (sessions 15-17): ``k1 = angle_k1 * k0`` referenced to mid-stance (maximal flexion), so the stiffness
+        falls towards touchdown and take-off, ``K = k0 (1 - angle_k1 R)`` at an extension ``R`` from mid-stance;
+        a draw in which ``K`` turns negative anywhere in the stance (against seed 000's Eq. 7) is re-drawn, so
+        ``angle_k1`` must stay below ``1 / R`` of the joint that moves most (the ankle, R 0.8-0.9 rad here).
     force_offset_n : float
         Constant added to the plate Fz (N).
     marker_latency_s : float
@@ -90,6 +100,7 @@ class StrictConfig:
     hops: int = 8
     seed: int = 0
     angle_k1: float = 0.0
+    angle_reference: str = "touchdown"
     force_offset_n: float = 0.0
     marker_latency_s: float = 0.0
     mass_kg: float = 60.0
@@ -248,8 +259,19 @@ def recording_stiffness(rng: np.random.Generator) -> np.ndarray:
     return K0_NOMINAL * rng.uniform(0.8, 1.2, 3)
 
 
+#: Typical flexion at mid-stance from touchdown (rad; ankle, knee, hip): the medians of the strict null's draws
+#: (seeds 0-3: 0.72 / 0.41 / 0.13), used only to scale the touchdown-referenced angle law's ``k_td`` so that a
+#: typical stance's mid-stance stiffness is the recording's ``k0`` (``StrictConfig.angle_reference``).
+PHI_MID_TYPICAL = np.array([0.72, 0.41, 0.13])
+
+
 def _mid_posture(body: Body, rng: np.random.Generator, cfg: StrictConfig, k0_rec: np.ndarray):
-    """Random mid-stance state at rest and the law that holds the joints still there."""
+    """Random mid-stance state at rest and the law that holds the joints still there.
+
+    ``k0``/``k1`` returned are the mid-stance form's with the recording's (or the stance's, with
+    ``stiffness_spread``) stiffness; with the touchdown reference :func:`_stance` replaces ``k0`` by its fixed point.
+    The posture and ``m_mid`` do not depend on them (statics at rest).
+    """
     a0 = np.arctan2(body.ankle_height, -ANKLE_ALONG * body.sole)
     a = a0 - np.deg2rad(rng.uniform(30.0, 45.0))  # heel raised
     th_t = np.deg2rad(rng.uniform(100.0, 115.0))
@@ -283,28 +305,63 @@ def stiffness_along(k0: np.ndarray, k1: np.ndarray, r: np.ndarray, r_mid: np.nda
 
 
 def _stance(body: Body, rng: np.random.Generator, cfg: StrictConfig, k0_rec: np.ndarray, tries: int = 20) -> dict:
-    """One time-symmetric stance (mirrored around mid-stance); re-drawn until it is a plausible hop."""
+    """One time-symmetric stance (mirrored around mid-stance); re-drawn until it is a plausible hop.
+
+    With the touchdown-referenced angle law the stance's mid-stance ``k0`` is ``k_td + k1 phi_mid`` with ``phi_mid``
+    the flexion from touchdown that the stance itself reaches: iterated to a fixed point (a draw that does not
+    converge in :data:`FIXED_POINT_ITERATIONS` is re-drawn).
+    """
     for _ in range(tries):
         q_mid, m_mid, k0, k1 = _mid_posture(body, rng, cfg, k0_rec)
-        model = StanceModel(body, q_mid[2:], m_mid, k0, k1)
-
-        def takeoff(t, y):
-            return y[0] if t > 1e-3 else -1.0
-
-        sol = solve_ivp(model.rhs, (0.0, 0.4), np.r_[q_mid, np.zeros(5)], method="DOP853", rtol=1e-9,
-                        atol=1e-11, events=TerminalEvent(takeoff, 1), dense_output=True)
-        if sol.status != 1:
+        if cfg.angle_k1 and cfg.angle_reference == "touchdown":
+            k_td = k0 / (1.0 + cfg.angle_k1 * PHI_MID_TYPICAL)
+            k1 = cfg.angle_k1 * k_td
+            phi_mid = PHI_MID_TYPICAL.copy()
+            for _ in range(FIXED_POINT_ITERATIONS):
+                k0 = k_td + k1 * phi_mid
+                st = _integrate(body, q_mid, m_mid, k0, k1)
+                if st is None:
+                    break
+                new = FLEX_SIGN * (q_mid[2:] - st["y_takeoff"][2:5])  # the touchdown posture is the take-off's
+                if np.max(np.abs(new - phi_mid)) < 1e-9:
+                    break
+                phi_mid = new
+            else:
+                continue
+        elif cfg.angle_reference not in ("touchdown", "mid-stance"):
+            raise ValueError(f"strict generator: angle_reference {cfg.angle_reference!r} (touchdown or mid-stance)")
+        else:
+            st = _integrate(body, q_mid, m_mid, k0, k1)
+        if st is None:
             continue
-        half = float(sol.t_events[0][0])
-        y_to = sol.y_events[0][0]
-        v_com = model.com_z_rate(y_to[:5], y_to[5:])
+        half, y_to, v_com = st["half_s"], st["y_takeoff"], st["v_com"]
         if not (0.1 < half < 0.25 and v_com > 0.5 and abs(y_to[1] - q_mid[1]) < 0.6):
             continue
-        if np.min(stiffness_along(k0, k1, sol.y[2:5], q_mid[2:])) < 0.0:  # seed Eq. 7: K >= 0 in stance
+        if np.min(stiffness_along(k0, k1, st["y"][2:5], q_mid[2:])) < 0.0:  # seed Eq. 7: K >= 0 in stance
             continue
-        return {"model": model, "dense": sol.sol, "half_s": half, "y_takeoff": y_to, "v_com": v_com,
+        return {"model": st["model"], "dense": st["dense"], "half_s": half, "y_takeoff": y_to, "v_com": v_com,
                 "k0": k0, "k1": k1, "m_mid": m_mid, "q_mid": q_mid}
     raise ValueError("strict generator: no plausible stance in 20 draws")
+
+
+#: Most iterations of the touchdown-referenced law's fixed point over ``phi_mid`` (:func:`_stance`).
+FIXED_POINT_ITERATIONS = 30
+
+
+def _integrate(body: Body, q_mid: np.ndarray, m_mid: np.ndarray, k0: np.ndarray, k1: np.ndarray) -> dict | None:
+    """The half stance from mid-stance at rest to take-off (None when it does not take off within 0.4 s)."""
+    model = StanceModel(body, q_mid[2:], m_mid, k0, k1)
+
+    def takeoff(t, y):
+        return y[0] if t > 1e-3 else -1.0
+
+    sol = solve_ivp(model.rhs, (0.0, 0.4), np.r_[q_mid, np.zeros(5)], method="DOP853", rtol=1e-9,
+                    atol=1e-11, events=TerminalEvent(takeoff, 1), dense_output=True)
+    if sol.status != 1:
+        return None
+    y_to = sol.y_events[0][0]
+    return {"model": model, "dense": sol.sol, "half_s": float(sol.t_events[0][0]), "y_takeoff": y_to,
+            "v_com": model.com_z_rate(y_to[:5], y_to[5:]), "y": sol.y}
 
 
 def _stance_state(st: dict, t_rel: float) -> tuple[np.ndarray, np.ndarray]:
