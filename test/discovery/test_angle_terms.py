@@ -9,31 +9,21 @@ default angle case and the outside generator's) plus white noise. With the optio
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 
 from hop_impedance.discovery import identify, model, stiffness_gate
 from hop_impedance.discovery.model import ModelSpec, feature_names
+from test.discovery.synthetic_stances import sine_stances
 
 KC = np.array([90.0, 110.0, 100.0])
 K1 = 2.5 * KC
 SPEC = ModelSpec(effects=("angle_dependent_stiffness",))
 
 
-def stances(noise_nm: float, seed: int = 0) -> list[SimpleNamespace]:
-    """Four stances of 0.25 s at 1 kHz: flexion ``dr = a sin(pi t / T)``, moments of the law plus white noise."""
-    rng = np.random.default_rng(seed)
-    out = []
-    for i, amp in enumerate((0.7, 0.8, 0.9, 1.0)):
-        t = np.arange(250) / 1000.0
-        a = amp * np.array([0.8, 0.45, 0.12])
-        rho = 0.3 + a * np.sin(np.pi * t / 0.25)[:, None]
-        omega = a * (np.pi / 0.25) * np.cos(np.pi * t / 0.25)[:, None]
-        dr = rho - rho[0]
-        moment = 15.0 * (i + 1) + KC * dr + K1 * dr**2 / 2 + noise_nm * rng.standard_normal(dr.shape)
-        out.append(SimpleNamespace(index=i, t_s=t, rho_rad=rho, omega_rad_s=omega, moment_nm=moment))
-    return out
+def stances(noise_nm: float, seed: int = 0):
+    """Four stances of 0.25 s at 1 kHz: flexion amplitudes 0.7-1.0 x (0.8, 0.45, 0.12) rad, the law plus noise."""
+    return sine_stances((0.7, 0.8, 0.9, 1.0), (0.8, 0.45, 0.12), lambda dr, dw: KC * dr + K1 * dr**2 / 2, noise_nm,
+                        seed, rho0=0.3, touchdown_moment=lambda i: 15.0 * (i + 1))
 
 
 def test_reduced_angle_law_has_eq10_terms_and_recovers_the_touchdown_stiffness(monkeypatch):

@@ -18,24 +18,16 @@ from scipy.optimize import nnls
 from hop_impedance.discovery import identify
 from hop_impedance.discovery.model import ModelSpec, feature_names, stance_features
 from hop_impedance.impedance.qp_fit import exact_constrained_lstsq
+from test.discovery.synthetic_stances import sine_stances
 
 SPEC = ModelSpec(effects=("joint_damping",))
 K0 = np.array([300.0, 150.0, 120.0])
 
 
 def stances(b0: float, b1: float, noise_nm: float, seed: int = 0) -> list[SimpleNamespace]:
-    """Four stances of 0.25 s at 1 kHz: ``rho = rho0 + a sin(pi t / T)``, moments of the law plus white noise."""
-    rng = np.random.default_rng(seed)
-    out = []
-    for i, amp in enumerate((0.25, 0.3, 0.35, 0.4)):
-        t = np.arange(250) / 1000.0
-        a = amp * np.array([0.6, 1.0, 0.5])
-        rho = 0.2 + a * np.sin(np.pi * t / 0.25)[:, None]
-        omega = a * (np.pi / 0.25) * np.cos(np.pi * t / 0.25)[:, None]
-        dr, dw = rho - rho[0], omega - omega[0]
-        moment = 20.0 + K0 * dr + b0 * dw + b1 * dw**2 / 2 + noise_nm * rng.standard_normal(dr.shape)
-        out.append(SimpleNamespace(index=i, t_s=t, rho_rad=rho, omega_rad_s=omega, moment_nm=moment))
-    return out
+    """Four stances of 0.25 s at 1 kHz, moments of ``M = 20 + k0 dr + b0 dw + b1 dw^2 / 2`` plus white noise."""
+    return sine_stances((0.25, 0.3, 0.35, 0.4), (0.6, 1.0, 0.5), lambda dr, dw: K0 * dr + b0 * dw + b1 * dw**2 / 2,
+                        noise_nm, seed)
 
 
 def damping_on_samples(coefs: np.ndarray, data: list[SimpleNamespace]) -> np.ndarray:
