@@ -126,6 +126,7 @@ def test_touchdown_referenced_angle_law_has_one_touchdown_stiffness_per_recordin
     _, truth = strict_recording(StrictConfig(hops=4, seed=2, angle_k1=2.5))
     k0, k1, pm = (np.array([h[k] for h in truth["per_hop"]]) for k in ("k0", "k1", "flex_mid_rad"))
     k_td = k0 - k1 * pm
+    np.testing.assert_allclose([h["k_touchdown"] for h in truth["per_hop"]], k_td, rtol=1e-12)
     assert np.ptp(k_td, axis=0).max() < 1e-6
     np.testing.assert_allclose(k1, 2.5 * k_td, rtol=1e-8)
     ratio = np.median(k_td / k0, axis=0)

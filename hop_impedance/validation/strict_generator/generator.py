@@ -496,13 +496,15 @@ def _marker_series(timeline: _Timeline, cfg: StrictConfig, rng: np.random.Genera
 
 
 def _per_hop_truth(timeline: _Timeline) -> list[dict]:
-    """Per stance: touchdown/take-off (s), k0, k1, touchdown moments (N m, extensor), flexion at mid-stance (rad)."""
+    """Per stance: touchdown/take-off (s), k0 (the mid-stance form's), k1, the stiffness at touchdown ``k0 - k1
+    flex_mid`` (seed 000's k0), touchdown moments (N m, extensor), flexion at mid-stance (rad)."""
     per_hop = []
     for kind, t0, t1, st in timeline.segments:
         if kind != "stance":
             continue
         q_td = _stance_state(st, 0.0)[0]
+        flex_mid = FLEX_SIGN * (st["q_mid"][2:] - q_td[2:])
         per_hop.append({"t_td": t0, "t_to": t1, "k0": st["k0"].tolist(), "k1": st["k1"].tolist(),
-                        "M_td": st["model"].moments(q_td[2:]).tolist(),
-                        "flex_mid_rad": (FLEX_SIGN * (st["q_mid"][2:] - q_td[2:])).tolist()})
+                        "k_touchdown": (st["k0"] - st["k1"] * flex_mid).tolist(),
+                        "M_td": st["model"].moments(q_td[2:]).tolist(), "flex_mid_rad": flex_mid.tolist()})
     return per_hop
