@@ -68,6 +68,10 @@ ANKLE_HEIGHT_H = 0.039
 ANKLE_ALONG = 0.75
 
 
+#: Where the angle law's ``k1`` is referenced (``StrictConfig.angle_reference``).
+ANGLE_REFERENCES = ("touchdown", "mid-stance")
+
+
 @dataclass(frozen=True)
 class StrictConfig:
     """One strict recording.
@@ -109,6 +113,10 @@ class StrictConfig:
     torque_noise_nm: float = 0.5
     marker_noise_m: float = 0.001
     stiffness_spread: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.angle_reference not in ANGLE_REFERENCES:
+            raise ValueError(f"strict generator: angle_reference {self.angle_reference!r} (one of {ANGLE_REFERENCES})")
 
     @property
     def effects(self) -> list[str]:
@@ -316,20 +324,7 @@ def _stance(body: Body, rng: np.random.Generator, cfg: StrictConfig, k0_rec: np.
         if cfg.angle_k1 and cfg.angle_reference == "touchdown":
             k_td = k0 / (1.0 + cfg.angle_k1 * PHI_MID_TYPICAL)
             k1 = cfg.angle_k1 * k_td
-            phi_mid = PHI_MID_TYPICAL.copy()
-            for _ in range(FIXED_POINT_ITERATIONS):
-                k0 = k_td + k1 * phi_mid
-                st = _integrate(body, q_mid, m_mid, k0, k1)
-                if st is None:
-                    break
-                new = FLEX_SIGN * (q_mid[2:] - st["y_takeoff"][2:5])  # the touchdown posture is the take-off's
-                if np.max(np.abs(new - phi_mid)) < 1e-9:
-                    break
-                phi_mid = new
-            else:
-                continue
-        elif cfg.angle_reference not in ("touchdown", "mid-stance"):
-            raise ValueError(f"strict generator: angle_reference {cfg.angle_reference!r} (touchdown or mid-stance)")
+            k0, st = _touchdown_referenced(body, q_mid, m_mid, k_td, k1)
         else:
             st = _integrate(body, q_mid, m_mid, k0, k1)
         if st is None:
@@ -346,6 +341,27 @@ def _stance(body: Body, rng: np.random.Generator, cfg: StrictConfig, k0_rec: np.
 
 #: Most iterations of the touchdown-referenced law's fixed point over ``phi_mid`` (:func:`_stance`).
 FIXED_POINT_ITERATIONS = 30
+
+
+def _touchdown_referenced(body: Body, q_mid: np.ndarray, m_mid: np.ndarray, k_td: np.ndarray,
+                          k1: np.ndarray) -> tuple[np.ndarray, dict | None]:
+    """The mid-stance form's ``k0 = k_td + k1 phi_mid`` at its fixed point over ``phi_mid`` and its half stance.
+
+    ``phi_mid`` (flexion at mid-stance from touchdown; the touchdown posture is the take-off's) starts at
+    :data:`PHI_MID_TYPICAL`; the half stance is None when a step does not take off or the iteration does not settle
+    to 1e-9 rad in :data:`FIXED_POINT_ITERATIONS`.
+    """
+    phi_mid = PHI_MID_TYPICAL.copy()
+    for _ in range(FIXED_POINT_ITERATIONS):
+        k0 = k_td + k1 * phi_mid
+        st = _integrate(body, q_mid, m_mid, k0, k1)
+        if st is None:
+            return k0, None
+        new = FLEX_SIGN * (q_mid[2:] - st["y_takeoff"][2:5])
+        if np.max(np.abs(new - phi_mid)) < 1e-9:
+            return k0, st
+        phi_mid = new
+    return k0, None
 
 
 def _integrate(body: Body, q_mid: np.ndarray, m_mid: np.ndarray, k0: np.ndarray, k1: np.ndarray) -> dict | None:
