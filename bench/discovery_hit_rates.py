@@ -43,7 +43,9 @@ every per-stance log gap ratio clipped to +-X, natural log units; log 10 = 2.302
 seed 000's Eq. 7, K >= 0 and B >= 0 on the training samples; session 16's option, off by default);
 ``--touchdown-velocity-fit W``: ``forward_selection.TOUCHDOWN_VELOCITY_FIT_S`` (each model's touchdown velocities
 corrected on the stance's first W s of joint angles; session 17's option, off by default); ``--gate-per-signal`` /
-``--no-gate-per-signal``: ``stiffness_gate.GATE_PER_SIGNAL`` (session 17; on by default since its end); set in this
+``--no-gate-per-signal``: ``stiffness_gate.GATE_PER_SIGNAL`` (session 17; on by default since its end); ``--energy-pairs``:
+``forward_selection.ENERGY_PAIRS`` (session 19's option: a loss and the push-off replacing it tried together when no
+single candidate passes); set in this
 process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
@@ -59,6 +61,7 @@ from pathlib import Path
 
 from scipy.stats import binomtest
 
+from hop_impedance.discovery.model import members
 from hop_impedance.discovery.workflow import discover
 from hop_impedance.io.recording_io import load_recording
 from hop_impedance.simulation.scenarios import Effects
@@ -121,7 +124,7 @@ def generate(name: str, seed: int, hops: int, sizes: EffectSizes = EffectSizes()
 def classify(expected: set, doc: dict) -> dict:
     """Counting flags of one run (see module docstring)."""
     found = set(doc["effects_found"])
-    ambiguous = {a["effect"] for st in doc["steps"] for a in st["ambiguous_with"]}
+    ambiguous = {one for st in doc["steps"] for a in st["ambiguous_with"] for one in members(a["effect"])}
     return {"exact": found == expected, "named": expected <= found,
             "named_or_ambiguous": expected <= (found | ambiguous), "extra": bool(found - expected),
             "found": sorted(found), "ambiguous": sorted(ambiguous)}
@@ -164,6 +167,9 @@ def main() -> None:
                          "on the stance's first W s (session 17's option)")
     ap.add_argument("--angle-terms", default=None, metavar="TERMS",
                     help="model.ANGLE_TERMS, e.g. k1 (seed 000's Eq. 10) or k1,k2 (Eq. 3, the default)")
+    ap.add_argument("--energy-pairs", action="store_true",
+                    help="forward_selection.ENERGY_PAIRS = True (session 19's option): when no single candidate passes, "
+                         "a loss and the push-off that replaces it tried together")
     ap.add_argument("--gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = True (session 17's option): the gate also passes a candidate "
                          "significantly better on one sampled signal (Bonferroni over the 7) and worse on none; "
@@ -210,6 +216,7 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--eq7-fit", identify, "EQ7_FIT", True if args.eq7_fit else None),
             ("--touchdown-velocity-fit", forward_selection, "TOUCHDOWN_VELOCITY_FIT_S", args.touchdown_velocity_fit),
             ("--angle-terms", model, "ANGLE_TERMS", tuple(args.angle_terms.split(",")) if args.angle_terms else None),
+            ("--energy-pairs", forward_selection, "ENERGY_PAIRS", True if args.energy_pairs else None),
             ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
             ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None)):
         if value is None:

@@ -38,11 +38,13 @@ from hop_impedance.discovery.model import (
     DURATION_GRID_S,
     JOINT_EFFECTS,
     ONSET_GRID_S,
+    PAIR_SEPARATOR,
     TAU_GRID_S,
     ModelSpec,
     activation_modulation,
     elastic_terms,
     feature_names,
+    members,
     stance_features,
 )
 from hop_impedance.impedance.qp_fit import exact_constrained_lstsq
@@ -319,6 +321,10 @@ def identify(spec: ModelSpec, trial: MeasuredTrial, stances: list[MeasuredStance
         With ``effect`` appended and its parameters set.
     coefficients : ndarray, shape (3, n_features)
     """
+    if effect is not None and PAIR_SEPARATOR in effect:  # a pair (forward_selection.ENERGY_PAIRS): the loss first,
+        for one in members(effect):  # then the push-off with the loss's parameters kept
+            spec, coefs = identify(spec, trial, stances, one, eq7_fit)
+        return spec, coefs
     if effect is not None:
         spec = spec.with_effect(effect)
     if effect == "time_dependent_activation":

@@ -64,6 +64,16 @@ EFFECT_NAMES: tuple[str, ...] = (
     "force_plate_offset",
     "active_push_off",
 )
+#: A candidate of two effects named together (``forward_selection.ENERGY_PAIRS``, session 19) joins their names with
+#: this, e.g. ``surface_compliance+active_push_off``; the document's ``effects_found`` lists the two.
+PAIR_SEPARATOR = "+"
+
+
+def members(effect: str) -> tuple[str, ...]:
+    """The effects a candidate's name stands for: one, or a pair's two (:data:`PAIR_SEPARATOR`)."""
+    return tuple(effect.split(PAIR_SEPARATOR))
+
+
 #: Effects that act on the joint law (fitted to the ID moments).
 JOINT_EFFECTS = ("angle_dependent_stiffness", "rate_dependent_stiffness", "joint_damping",
                  "time_dependent_activation", "active_push_off")

@@ -19,7 +19,7 @@ from hop_impedance.discovery import stiffness_gate
 from hop_impedance.discovery.body_nuisance import FAILED_GAP, choose_body
 from hop_impedance.discovery.identify import SIGNALS, core, identify, residuals
 from hop_impedance.discovery.measurement import MeasuredTrial, measure_trial
-from hop_impedance.discovery.model import ModelSpec, feature_names
+from hop_impedance.discovery.model import PAIR_SEPARATOR, ModelSpec, feature_names, members
 from hop_impedance.discovery.stiffness_gate import gate, shoot
 from hop_impedance.recording import Recording
 
@@ -103,6 +103,8 @@ def parameters_of(spec: ModelSpec, coefs: np.ndarray, effect: str | None) -> dic
     names = feature_names(spec)
     law = {j: {n: float(c) for n, c in zip(names, coefs[k])} for k, j in enumerate(JOINT_NAMES)}
     out: dict[str, Any]  # a JSON document
+    if effect is not None and PAIR_SEPARATOR in effect:  # a pair's step: each member's parameters under its name
+        return {one: parameters_of(spec, coefs, one) for one in members(effect)}
     if effect in (None, "angle_dependent_stiffness", "rate_dependent_stiffness", "joint_damping"):
         out = {"joint_law": law}
     elif effect == "time_dependent_activation":
@@ -173,9 +175,7 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
             cands = fs.remaining(spec)
             if not cands:
                 break
-            scores = _scored_round(ev, spec, trial, current, cands, timing)
-            ok, gates = _gated(ev, (spec_fit, coefs), scores, len(cands), doc, timing, shots)
-            doc["selection"]["rounds"].append(_round_json(scores, len(cands), scales, gates))
+            ok, scores, factor = _selection_round(ev, (spec, spec_fit, coefs), trial, current, cands, doc, timing, shots)
             if not ok:
                 break
             best = max(ok, key=lambda sc: sc.mean_log_ratio)
@@ -184,18 +184,44 @@ def discover(rec: Recording, *, max_steps: int = MAX_STEPS, workers: int | None 
             # the body split absorbed what the model missed before this step: choose it again with the step
             trial, spec = _body_for(rec, trial, spec, workers, doc)
             spec_fit, coefs = identify(spec, trial, trial.stances)
-            doc["steps"].append(_step_json(best, scores, evidence, parameters_of(spec, coefs, best.effect), len(cands),
+            doc["steps"].append(_step_json(best, scores, evidence, parameters_of(spec, coefs, best.effect), factor,
                                            current, scales))
             # the next round compares with this model (on the new body when it was chosen again; _runs_reusable)
             current = best.runs if _runs_reusable(best.runs, spec) else ev.run(spec, [None])[0]
         doc["final_gap"] = current.figures(scales)
         doc["final_gap_through_simulation"] = _final_shot_json(ev, spec_fit, coefs, shots, timing)
-    doc["effects_found"] = [st["effect"] for st in doc["steps"]]
+    doc["effects_found"] = [one for st in doc["steps"] for one in members(st["effect"])]
     doc["final_model"] = _final_model_json(spec, spec_fit, coefs)
     timing["per_candidate_s"] = {k: float(np.mean(v)) for k, v in timing["per_candidate_s"].items()}
     timing["total_s"] = time.perf_counter() - t_start
     doc["timing"] = timing
     return doc
+
+
+def _selection_round(ev: fs.HeldOutEvaluator, model: tuple[ModelSpec, ModelSpec, np.ndarray], trial: MeasuredTrial,
+                     current: fs.HeldOutRuns, cands: tuple[str, ...], doc: dict, timing: dict,
+                     shots: dict) -> tuple[list[fs.ForwardScore], list[fs.ForwardScore], int]:
+    """One round: every candidate judged held out and gated (:func:`_gated`), then, when none passes, the second look
+    at a loss with the push-off that replaces it (:func:`hop_impedance.discovery.forward_selection.energy_pairs`).
+
+    ``model``: the current spec, and the spec and coefficients identified on all stances. Appends the round to
+    ``doc["selection"]["rounds"]``; returns the candidates that passed, every score, and the round's Bonferroni factor
+    (the candidates, plus the pairs when they were looked at).
+    """
+    spec, spec_fit, coefs = model
+    scales = ev.scales
+    scores = _scored_round(ev, spec, trial, current, cands, timing)
+    ok, gates = _gated(ev, (spec_fit, coefs), scores, len(cands), doc, timing, shots)
+    round_doc, factor = _round_json(scores, len(cands), scales, gates), len(cands)
+    pairs = () if ok else fs.energy_pairs(spec, trial)
+    if pairs:
+        factor = len(cands) + len(pairs)
+        pair_scores = _scored_round(ev, spec, trial, current, pairs, timing, factor)
+        ok, pair_gates = _gated(ev, (spec_fit, coefs), pair_scores, factor, doc, timing, shots)
+        round_doc.update(_round_json(pair_scores, factor, scales, pair_gates))
+        scores = scores + pair_scores
+    doc["selection"]["rounds"].append(round_doc)
+    return ok, scores, factor
 
 
 def _final_shot_json(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, coefs: np.ndarray, shots: dict, timing: dict) -> dict:
@@ -321,18 +347,19 @@ def _baseline_document(spec_fit: ModelSpec, coefs: np.ndarray, trial: MeasuredTr
 
 
 def _scored_round(ev: fs.HeldOutEvaluator, spec: ModelSpec, trial: MeasuredTrial, current: fs.HeldOutRuns,
-                  cands: tuple[str, ...], timing: dict) -> list[fs.ForwardScore]:
+                  cands: tuple[str, ...], timing: dict, factor: int | None = None) -> list[fs.ForwardScore]:
     """One selection round: the held-out runs of ``spec`` plus each candidate, scored against ``current``.
 
     Adds the round's wall time (s) to ``timing["rounds"]`` and each
-    candidate's to ``timing["per_candidate_s"]``.
+    candidate's to ``timing["per_candidate_s"]``. ``factor``: the round's Bonferroni factor (default: the
+    number of ``cands``; the second look's pairs pass the round's candidates plus the pairs).
     """
     t0 = time.perf_counter()
     runs = ev.run(spec, list(cands))
     timing["rounds"].append(time.perf_counter() - t0)
     for r in runs:
         timing["per_candidate_s"].setdefault(r.effect, []).append(r.seconds)
-    return fs.defer_energy_effects(fs.score(trial, current, runs), stiffness_gate.screen_factor(len(cands)))
+    return fs.defer_energy_effects(fs.score(trial, current, runs), stiffness_gate.screen_factor(factor or len(cands)))
 
 
 def _round_json(scores: list[fs.ForwardScore], n_candidates: int, scales: np.ndarray, gates: dict) -> dict:
