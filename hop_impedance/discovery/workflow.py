@@ -217,6 +217,8 @@ def _selection_round(ev: fs.HeldOutEvaluator, model: tuple[ModelSpec, ModelSpec,
     if pairs:
         factor = len(cands) + len(pairs)
         pair_scores = _scored_round(ev, spec, trial, current, pairs, timing, factor)
+        pair_s = timing["rounds"].pop()
+        timing["rounds"][-1] += pair_s  # one round of the document: its time includes the pairs'
         ok, pair_gates = _gated(ev, (spec_fit, coefs), pair_scores, factor, doc, timing, shots)
         round_doc.update(_round_json(pair_scores, factor, scales, pair_gates))
         scores = scores + pair_scores

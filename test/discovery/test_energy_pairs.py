@@ -89,6 +89,7 @@ def test_push_off_on_the_soft_surface_is_named_as_the_pair(push_soft, monkeypatc
     assert step["gap_after"]["total"] < 0.1 * step["gap_before"]["total"]
     assert min(step["evidence"]["per_stance_log_gap_ratio"]) > np.log(5.0)
     assert set(step["parameters"]) == set(members(PAIR))
+    assert len(doc["timing"]["rounds"]) == len(doc["selection"]["rounds"])  # the pairs' time is their round's
     # the energy balance: the pair brings the simulated net joint work near the measured (+27 J per stance)
     phys = step["evidence"]["physics"]
     assert phys["work_mismatch_j"]["candidate"] < 0.5 * phys["work_mismatch_j"]["current"]
