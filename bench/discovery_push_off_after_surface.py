@@ -206,7 +206,7 @@ def main() -> None:
         fs._CONTEXT.update(rec=rec, trial=trial, scales=fs.gap_scales(trial))
         scales = fs._CONTEXT["scales"]
         spec, _ = identify(ModelSpec(), trial, trial.stances, "surface_compliance")
-        work = np.array([fs.measured_net_work_j(s) for s in trial.stances])
+        work = fs.measured_net_works_j(trial)
         c, p = spec.compliance
         print(f"{path.stem}: surface c {c:.3g} p {p} (n {1 / p:.2f}), damping {spec.ground_damping_n_s_m:.0f} N s/m; "
               f"truth surfaces {sorted(set(h['surface'] for h in truth['per_hop']))}")

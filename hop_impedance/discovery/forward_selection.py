@@ -193,6 +193,11 @@ def measured_net_work_j(s: MeasuredStance) -> float:
     return float(np.sum(trapezoid(-s.moment_nm * s.omega_rad_s, s.t_s, axis=0)))
 
 
+def measured_net_works_j(trial: MeasuredTrial) -> np.ndarray:
+    """:func:`measured_net_work_j` of every stance of ``trial`` (J), in order."""
+    return np.array([measured_net_work_j(s) for s in trial.stances])
+
+
 def gap_scales(trial: MeasuredTrial) -> np.ndarray:
     """Scales of :data:`GAP_SIGNALS` (mean per-stance range) and of the duration (10 % of mean stance time)."""
     out = [np.mean([np.ptp(s.fz_raw_n) for s in trial.stances])]
@@ -559,7 +564,7 @@ def simulated_mean(x: np.ndarray) -> float | None:
 
 def physics_evidence(trial: MeasuredTrial, current: HeldOutRuns, cand: HeldOutRuns) -> dict:
     """Energy balance, stance-to-stance variation, flight force and latency of one candidate."""
-    w_meas = np.array([measured_net_work_j(s) for s in trial.stances])
+    w_meas = measured_net_works_j(trial)
     n = len(w_meas)
     se = float(np.std(w_meas, ddof=1) / np.sqrt(n)) if n > 1 else float("nan")
     flight = np.concatenate([s.flight_fz_n for s in trial.stances])
@@ -722,7 +727,7 @@ def energy_pairs(spec: ModelSpec, trial: MeasuredTrial) -> tuple[str, ...]:
 
 def measured_work_positive(trial: MeasuredTrial) -> bool:
     """Do the measured stances show net positive joint work (one-sided t-test over stances, p < :data:`WORK_ALPHA`)?"""
-    return one_sided_t(np.array([measured_net_work_j(s) for s in trial.stances])) < WORK_ALPHA
+    return one_sided_t(measured_net_works_j(trial)) < WORK_ALPHA
 
 
 def law_gaps(trial: MeasuredTrial, laws: list, grounds: list, offset_n: float = 0.0) -> np.ndarray:
