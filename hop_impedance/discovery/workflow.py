@@ -210,6 +210,7 @@ def _selection_round(ev: fs.HeldOutEvaluator, model: tuple[ModelSpec, ModelSpec,
     """
     spec, spec_fit, coefs = model
     scales = ev.scales
+    timing["rounds"].append(0.0)  # this round's held-out runs, the pairs' included (_scored_round adds them)
     scores = _scored_round(ev, spec, trial, current, cands, timing)
     ok, gates = _gated(ev, (spec_fit, coefs), scores, len(cands), doc, timing, shots)
     round_doc, factor = _round_json(scores, len(cands), scales, gates), len(cands)
@@ -217,8 +218,6 @@ def _selection_round(ev: fs.HeldOutEvaluator, model: tuple[ModelSpec, ModelSpec,
     if pairs:
         factor = len(cands) + len(pairs)
         pair_scores = _scored_round(ev, spec, trial, current, pairs, timing, factor)
-        pair_s = timing["rounds"].pop()
-        timing["rounds"][-1] += pair_s  # one round of the document: its time includes the pairs'
         ok, pair_gates = _gated(ev, (spec_fit, coefs), pair_scores, factor, doc, timing, shots)
         round_doc.update(_round_json(pair_scores, factor, scales, pair_gates))
         scores = scores + pair_scores
@@ -352,13 +351,13 @@ def _scored_round(ev: fs.HeldOutEvaluator, spec: ModelSpec, trial: MeasuredTrial
                   cands: tuple[str, ...], timing: dict, factor: int | None = None) -> list[fs.ForwardScore]:
     """One selection round: the held-out runs of ``spec`` plus each candidate, scored against ``current``.
 
-    Adds the round's wall time (s) to ``timing["rounds"]`` and each
+    Adds the runs' wall time (s) to the round's entry, the last of ``timing["rounds"]``, and each
     candidate's to ``timing["per_candidate_s"]``. ``factor``: the round's Bonferroni factor (default: the
     number of ``cands``; the second look's pairs pass the round's candidates plus the pairs).
     """
     t0 = time.perf_counter()
     runs = ev.run(spec, list(cands))
-    timing["rounds"].append(time.perf_counter() - t0)
+    timing["rounds"][-1] += time.perf_counter() - t0
     for r in runs:
         timing["per_candidate_s"].setdefault(r.effect, []).append(r.seconds)
     return fs.defer_energy_effects(fs.score(trial, current, runs), stiffness_gate.screen_factor(factor or len(cands)))
