@@ -26,24 +26,11 @@ import numpy as np
 from discovery_hit_rates import BASE, CASES, generate
 
 from hop_impedance.discovery import forward_selection as fs
-from hop_impedance.discovery.identify import identify
 from hop_impedance.discovery.measurement import measure_trial
 from hop_impedance.discovery.model import ModelSpec, members
 from hop_impedance.simulation.ground import SURFACES
 from hop_impedance.simulation.scenarios import DEFAULT_TOUCHDOWN_RHO, Effects
 from hop_impedance.simulation.stance_set import RIGID_NO_BOUNCE, EffectSizes, _stance_set_law
-
-
-def held_out(trial, effect: str | None) -> tuple[np.ndarray, np.ndarray]:
-    """Per-stance held-out gap and simulated net joint work (J) of the baseline plus ``effect`` (a set joined by +)."""
-    scales, gaps, work = fs.gap_scales(trial), [], []
-    for s in trial.stances:
-        train = [x for x in trial.stances if x.index != s.index]
-        spec, coefs = identify(ModelSpec(), trial, train, effect)
-        out = fs.simulate_held_out(spec, coefs, trial, s, scales)
-        gaps.append(out["gap"])
-        work.append(out["net_work_j"])
-    return np.array(gaps), np.array(work)
 
 
 def line(name: str, gaps: np.ndarray, base: np.ndarray | None, work: np.ndarray | None = None) -> str:
@@ -72,15 +59,17 @@ def main() -> None:
     trial = measure_trial(rec)
     print(f"{args.case} seed {args.seed}: {freq} Hz, {len(trial.stances)} stances, touchdown-velocity fit "
           f"{fs.TOUCHDOWN_VELOCITY_FIT_S}")
-    measured = np.array([fs.measured_net_work_j(s) for s in trial.stances])
+    measured = fs.measured_net_works_j(trial)
     print(f"{'measured net joint work (J)':<48} " + " ".join(f"{w:.0f}" for w in measured))
-    base, work = held_out(trial, None)
-    print(line("baseline (held out)", base, None, work), flush=True)
     for effect in args.sets:
         for one in members(effect):
             assert one in fs.EFFECT_NAMES, f"unknown effect {one}"
-        gaps, work = held_out(trial, effect)
-        print(line(effect + " (held out)", gaps, base, work), flush=True)
+    with fs.HeldOutEvaluator(rec, trial) as ev:  # discovery's own leave-one-out runs, on both cores
+        runs = ev.run(ModelSpec(), [None, *args.sets])
+    base = runs[0].gaps
+    print(line("baseline (held out)", base, None, runs[0].net_work_j), flush=True)
+    for effect, r in zip(args.sets, runs[1:]):
+        print(line(effect + " (held out)", r.gaps, base, r.net_work_j), flush=True)
     law_switches, surfaces, _, _ = CASES[args.case]
     effects = Effects(**{**BASE, **law_switches})
     for names in (surfaces, ("rigid",)):

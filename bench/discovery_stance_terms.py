@@ -1,8 +1,9 @@
 """The baseline's held-out gap of each stance of a recording, term by term, with and without the touchdown-velocity fit.
 
 Each stance left out once: the strict baseline identified on the others and the stance simulated as discovery does
-(``forward_selection.simulate_held_out``), once from the measured touchdown state and once with
-``forward_selection.TOUCHDOWN_VELOCITY_FIT_S`` = W (the velocities corrected on the stance's first W s). Printed per
+(``forward_selection.HeldOutEvaluator.run``, so every stance is simulated whatever ``--stances`` prints), once from the
+measured touchdown state and once with ``forward_selection.TOUCHDOWN_VELOCITY_FIT_S`` = W (the velocities corrected on
+the stance's first W s). Printed per
 stance: the gap G, the seven RMS terms over their scales (GRF, ankle / knee / hip angle, ankle / knee / hip moment),
 the duration error, the simulated and measured net joint work and the end reason.
 
@@ -24,7 +25,6 @@ import argparse
 import numpy as np
 
 from hop_impedance.discovery import forward_selection as fs
-from hop_impedance.discovery.identify import identify
 from hop_impedance.discovery.measurement import measure_trial
 from hop_impedance.discovery.model import ModelSpec
 from hop_impedance.io.recording_io import load_recording
@@ -37,30 +37,29 @@ def main() -> None:
     ap.add_argument("--stances", default="", help="positions in the measured trial, e.g. 5,6,8 (default: all)")
     ap.add_argument("--discover", action="store_true", help="also discover with and without the fit")
     args = ap.parse_args()
-    trial = measure_trial(load_recording(args.recording))
+    rec = load_recording(args.recording)
+    trial = measure_trial(rec)
     scales = fs.gap_scales(trial)
+    measured = fs.measured_net_works_j(trial)
     picked = [int(k) for k in args.stances.split(",") if k] or range(len(trial.stances))
     print("stance  fit     G       GRF  ang_a ang_k ang_h mom_a mom_k mom_h  duration ms  work sim / measured J  end")
     means = {}
     for window in (None, args.touchdown_velocity_fit):
-        fs.TOUCHDOWN_VELOCITY_FIT_S = window
-        gaps = []
+        fs.TOUCHDOWN_VELOCITY_FIT_S = window  # before the evaluator forks its workers, which read it
+        with fs.HeldOutEvaluator(rec, trial) as ev:  # discovery's own leave-one-out runs of the baseline
+            r = ev.run(ModelSpec(), [None])[0]
         for k in picked:
-            s = trial.stances[k]
-            _, coefs = identify(ModelSpec(), trial, [x for x in trial.stances if x.index != s.index])
-            out = fs.simulate_held_out(ModelSpec(), coefs, trial, s, scales)
-            gaps.append(out["gap"])
-            terms = " ".join(f"{v:5.2f}" for v in out["rms"] / scales[:7])
-            print(f"{k:>6}  {str(window):<6} {out['gap']:7.3f}  {terms}  {1e3 * out['duration_error_s']:+8.0f}  "
-                  f"{out['net_work_j']:+8.1f} / {fs.measured_net_work_j(s):+6.1f}  {out['end_reason']}", flush=True)
-        means[window] = float(np.mean(gaps))
+            terms = " ".join(f"{v:5.2f}" for v in r.rms[k] / scales[:7])
+            print(f"{k:>6}  {str(window):<6} {r.gaps[k]:7.3f}  {terms}  {1e3 * r.duration_error_s[k]:+8.0f}  "
+                  f"{r.net_work_j[k]:+8.1f} / {measured[k]:+6.1f}  {r.end_reasons[k]}", flush=True)
+        means[window] = float(np.mean(r.gaps[list(picked)]))
     print("mean G: " + ", ".join(f"fit {w}: {g:.3f}" for w, g in means.items()))
     if args.discover:
         from hop_impedance.discovery.workflow import discover
 
         for window in (None, args.touchdown_velocity_fit):
             fs.TOUCHDOWN_VELOCITY_FIT_S = window
-            doc = discover(load_recording(args.recording))
+            doc = discover(rec)
             print(f"discover, fit {window}: named {doc['effects_found'] or 'nothing'}, baseline gap "
                   f"{doc['baseline_gap']['total']:.3f}")
             for r, rnd in enumerate(doc["selection"]["rounds"]):
