@@ -14,8 +14,11 @@ held-out gap was 2.96 against 0.92, from three stances that take off far too ear
 ``--discover``: also ``discover`` on the recording with and without the fit, printing the effects named, every
 round's held-out screen (p, pooled shrink) and the stiffness gate's p.
 
+``--accept-step`` / ``--own-ground-jacobian`` (session 20): the fit's sub-options
+``forward_selection.VELOCITY_FIT_ACCEPT`` / ``VELOCITY_JACOBIAN_OWN_GROUND`` on the runs with the fit.
+
 Usage: .venv/bin/python bench/discovery_stance_terms.py REC.mcap [--touchdown-velocity-fit 0.06] [--stances 5,6,8]
-       [--discover]
+       [--discover] [--accept-step] [--own-ground-jacobian]
 """
 
 from __future__ import annotations
@@ -36,7 +39,12 @@ def main() -> None:
     ap.add_argument("--touchdown-velocity-fit", type=float, default=0.06, metavar="W")
     ap.add_argument("--stances", default="", help="positions in the measured trial, e.g. 5,6,8 (default: all)")
     ap.add_argument("--discover", action="store_true", help="also discover with and without the fit")
+    ap.add_argument("--accept-step", action="store_true", help="forward_selection.VELOCITY_FIT_ACCEPT")
+    ap.add_argument("--own-ground-jacobian", action="store_true",
+                    help="forward_selection.VELOCITY_JACOBIAN_OWN_GROUND")
     args = ap.parse_args()
+    fs.VELOCITY_FIT_ACCEPT = args.accept_step  # module options: set before any evaluator forks its workers
+    fs.VELOCITY_JACOBIAN_OWN_GROUND = args.own_ground_jacobian
     rec = load_recording(args.recording)
     trial = measure_trial(rec)
     scales = fs.gap_scales(trial)
@@ -66,8 +74,10 @@ def main() -> None:
                 print(f"  round {r} screen: " + ", ".join(f"{e} p {v['p_value']:.2g} shrink {100 * v['held_out_shrink']:+.0f} %"
                                                           for e, v in rnd.items() if v["held_out_shrink"] > 0))
             for g in doc["selection"]["stiffness_through_simulation"]:
-                print(f"  round {g['round']} gate: " + ", ".join(f"{e} p {v['p_value']:.2g} passes {v['passes']}"
-                                                              for e, v in g["candidates"].items()))
+                print(f"  round {g['round']} gate: current shot, mean per-stance gap "
+                      f"{np.mean(g['current']['per_stance_gap_shot']):.3f}; "
+                      + ", ".join(f"{e} p {v['p_value']:.2g} passes {v['passes']}, shot "
+                                  f"{np.mean(v['per_stance_gap_shot']):.3f}" for e, v in g["candidates"].items()))
 
 
 if __name__ == "__main__":
