@@ -31,7 +31,7 @@ Eq. 4), zero by default as measured at touchdown in hopping (seed 001).
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TypeVar
 
 import numpy as np
@@ -219,6 +219,91 @@ class Eq3Law(ImpedanceLaw):
         out = {"type": "eq3", **{n: getattr(self, n).tolist() for n in COEFFICIENT_NAMES}}
         out["activation"] = None if self.activation is None else vars(self.activation).copy()
         return out
+
+
+@dataclass(frozen=True)
+class PreparedStiffening(ImpedanceLaw):
+    """Eq. 3's ``k1`` term with its rise pre-programmed in time along an expected stance (seed 001; off by default:
+    no hopper builds it, :mod:`hop_impedance.simulation.surface_surprise` does).
+
+    Eq. 3's angle-dependent part ``k1 dr^2 / 2 = int k1 dr d(rho)`` lets the stiffness grow with flexion. Seed 000
+    reads that growth as pre-programmed muscle action (its K(t) bell peaks "at mid-stance, when the jumper's joints
+    are maximally flexed"), and seed 001 shows where it comes from: the active state q "rises as a result of
+    stimulation STIM(t), which is fixed in time", and "force rise ... mainly depends on the rise in q". On the
+    surface the hopper expected, time and flexion go together, so the two readings give the same moment. On an
+    unexpected surface they part: here the stiffness's rise follows the expected stance's flexion *in time*,
+
+        M = a(t) k1 S,    dS/dt = dr_exp(t) omega,    S(0) = 0,
+
+    where ``dr_exp(t)`` is the expected stance's ``rho - rho0`` at time ``t`` since touchdown (held at its last value
+    after that stance's end) and ``a(t)`` the law's activation. Along the expected stance ``S = dr^2 / 2`` exactly
+    (Eq. 3's term); a joint that flexes *earlier* than expected meets the lower stiffness of the earlier time.
+
+    Attributes
+    ----------
+    k1 : ndarray, shape (3,)
+        N m/rad^2, Eq. 3's ``k1``.
+    times_s : ndarray, shape (n,)
+        Increasing times since touchdown of the expected stance (s).
+    expected_dr_rad : ndarray, shape (n, 3)
+        Its joint angles minus their touchdown values (rad) at ``times_s``.
+    activation : TimeActivation, BellActivation or None
+        The activation that scales the elastic moment (the Eq. 3 law's own).
+    """
+
+    k1: np.ndarray
+    times_s: np.ndarray
+    expected_dr_rad: np.ndarray
+    activation: TimeActivation | BellActivation | None = None
+
+    n_states = 3
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "k1", _as3(self.k1))
+        t = np.asarray(self.times_s, float)
+        dr = np.asarray(self.expected_dr_rad, float)
+        if t.ndim != 1 or len(t) < 2 or np.any(np.diff(t) <= 0) or dr.shape != (len(t), 3):
+            raise ValueError(f"prepared stiffening needs increasing times (n,) and angle changes (n, 3), got "
+                             f"{t.shape}, {dr.shape}")
+        object.__setattr__(self, "times_s", t)
+        object.__setattr__(self, "expected_dr_rad", dr)
+
+    def expected_dr(self, t_s) -> np.ndarray:
+        """``dr_exp(t)`` (rad), shape (..., 3)."""
+        t = np.asarray(t_s, float)
+        return np.stack([np.interp(t, self.times_s, self.expected_dr_rad[:, j]) for j in range(3)], axis=-1)
+
+    def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102 (see base class)
+        elastic = self.k1 * np.asarray(states, float)
+        if self.activation is not None:
+            elastic = self.activation.value(t_s)[..., None] * elastic
+        return elastic
+
+    def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102
+        return self.expected_dr(t_s) * np.asarray(omega, float)
+
+    def to_dict(self) -> dict:  # noqa: D102
+        return {"type": "prepared_stiffening", "k1": self.k1.tolist(), "times_s": self.times_s.tolist(),
+                "expected_dr_rad": self.expected_dr_rad.tolist(),
+                "activation": None if self.activation is None else vars(self.activation).copy(),
+                "law": "M = a(t) k1 S, dS/dt = dr_expected(t) omega (Eq. 3's k1 term along the expected stance)"}
+
+
+def with_prepared_stiffening(law: ImpedanceLaw, times_s, expected_dr_rad) -> CompositeLaw:
+    """``law`` with its Eq. 3 part's ``k1`` term pre-programmed along an expected stance (:class:`PreparedStiffening`).
+
+    ``law`` is an :class:`Eq3Law` or a :class:`CompositeLaw` holding one; its ``k1`` moves into a
+    :class:`PreparedStiffening` with the same activation, everything else is kept. Along the expected stance the
+    moments are the same as ``law``'s.
+    """
+    parts = law.parts if isinstance(law, CompositeLaw) else (law,)
+    eq3 = next((p for p in parts if isinstance(p, Eq3Law)), None)
+    if eq3 is None:
+        raise ValueError("with_prepared_stiffening needs an Eq3Law part")
+    without_k1 = replace(eq3, k1=np.zeros(3))
+    prepared = PreparedStiffening(eq3.k1, times_s, expected_dr_rad, eq3.activation)
+    new_parts = tuple(q for p in parts for q in ((without_k1, prepared) if p is eq3 else (p,)))
+    return CompositeLaw(new_parts)
 
 
 def constant_stiffness(k0_nm_rad, b0_nm_s_rad=0.0) -> Eq3Law:

@@ -1,16 +1,45 @@
 """Seed 001's unexpected hard surface: one stance on the expected soft surface against the same on hard.
 
-Seed 001 (van der Krogt et al. 2009): the law tuned for the soft surface, the same touchdown and the same
-pre-programmed activation meet an unexpected hard surface; leg stiffness (peak GRF over leg compression) falls
-compared with the expected soft surface, the ankle and knee flex more and the hip less ("increased flexion in the
-ankle and knee joint and, to a lesser extent, in the hip joint"), and "joint stiffness was lower at all joints ...
-most pronounced at the ankle". :func:`unexpected_hard_vs_soft` measures those figures on one simulated stance pair;
-test/simulation and bench/simulator_issue17.py use it.
+Seed 001 (van der Krogt et al. 2009): the hopper prepared for the soft surface, with the same touchdown and the same
+pre-programmed activation, meets an unexpected hard surface; leg stiffness falls compared with the expected soft
+surface, the ankle and knee flex more and the hip less ("increased flexion in the ankle and knee joint and, to a
+lesser extent, in the hip joint"), and "joint stiffness was lower at all joints ... most pronounced at the ankle".
+:func:`unexpected_hard_vs_soft` measures those figures on one simulated stance pair; test/simulation and
+bench/simulator_issue17.py use it.
 
-Joint stiffness (choice; seed 001 defines it as "the slope of the relationship between" joint moment and joint
-angle): the net moment's change over the angle's change from touchdown to the joint's maximal flexion (the
-loading phase), the hip's net moment including the trunk balance. "Falls most" is read relatively (hard / soft - 1),
-since the three joints' stiffnesses differ several-fold.
+Definitions (seed 001's Methods, "Definitions", following its refs. 12 and 23):
+
+- Leg stiffness: "the ratio of the peak ground reaction force to the maximum vertical displacement of the center of
+  mass", the displacement being the leg's compression, "calculated by subtracting the surface displacement from the
+  vertical displacement of the COM" (:func:`~hop_impedance.simulation.hopping_trial.leg_stiffness_n_per_m`).
+- Joint stiffness: "joint stiffness as the slope of the relationship between" joint moment and joint angle (the
+  stored text drops the words after "between"; its Fig. 6B plots "ankle moment vs. ankle angle change from touch
+  down to midstance", and "Midstance was defined as the instant that COM reached its lowest value"). So
+  :func:`joint_stiffness_nm_rad` is the net moment's change over the angle's change from touchdown to midstance (the
+  COM's lowest point), the hip's net moment including the trunk balance. Until session 20 it was read to each joint's
+  maximal flexion instead, which is not the paper's quantity: the ankle and knee flex maximally near midstance, but
+  the hip some 3-10 % of the stance after it (docs/simulator.md, session 20). "Falls most" is read relatively
+  (hard / soft - 1), since the three joints' stiffnesses differ several-fold.
+
+What the hopper prepares before landing (session 20; ``anticipate`` and ``preprogrammed``, both on by default; both
+off is sessions 12-19's experiment):
+
+- ``anticipate``: seed 001's subjects, and its model fitted to them, prepared for the soft surface: "human hoppers
+  and runners adjust leg stiffness when expecting a transition in surface stiffness (15, 16). This adjustment results
+  in similar COM dynamics, regardless of surface stiffness", and their contact lasted 365 ms on the soft surface
+  against 385 ms on the hard one (its model 368 / 376 ms). The hopper's law is the one it prepared for a hard
+  surface (Table 2, seed 000's force plate); expecting the soft surface it scales its joint springs (k0 and k1 of
+  every joint, one factor, :func:`anticipated_stiffening`) until its passive stance on the soft law is as long as
+  that law's passive stance on seed 001's hard law. One rule at every frequency; the factor is what the rule gives
+  there (1.16 / 1.42 / 1.88 at 1.53 / 1.87 / 2.2 Hz on the seed-like preset).
+- ``preprogrammed``: the activation that seed 001 keeps the same on the unexpected surface ("without changing initial
+  geometry, initial muscle stimulation, or STIM(t) during ground contact") is fixed in time, and the rise of force
+  with it ("force rise ... mainly depends on the rise in q", q "fixed in time"). In Eq. 3 that rise is the
+  angle-dependent k1 term; here it is pre-programmed along the expected soft stance
+  (:class:`~hop_impedance.simulation.impedance_laws.PreparedStiffening`): the same moments on the expected surface,
+  while a joint that flexes earlier on the hard surface meets the stiffness of the earlier time. The bell activation
+  and the push-off were already fixed in time; the touchdown state, the trunk balance and the push-off's calibrated
+  amplitude are the soft hop's on both surfaces.
 
 Contact (choice, issue 17 session 12; tested in test/simulation/test_sim_surface_surprise.py): seed 001's two surface
 laws are the foot-surface interaction itself, not the surface alone. Its Methods: "The coefficients for these
@@ -27,7 +56,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq
 
+from hop_impedance.simulation.dynamics import Chain, body_com
 from hop_impedance.simulation.ground import HARD, SOFT, PaddedGround, with_pad
 from hop_impedance.simulation.hopping_trial import (
     calibrate,
@@ -36,21 +67,33 @@ from hop_impedance.simulation.hopping_trial import (
     touchdown_posture,
     touchdown_state,
 )
-from hop_impedance.simulation.scenarios import Effects, hopping_config
-from hop_impedance.simulation.stance import StanceSimulation, simulate_stance
+from hop_impedance.simulation.impedance_laws import with_prepared_stiffening
+from hop_impedance.simulation.scenarios import Effects, build_law, hopping_config, law_scale_at, nominal_stance_s
+from hop_impedance.simulation.stance import StanceSimulation, resample_stance, simulate_stance
+
+#: Sampling step of the two stances (s) on which the figures are read (their dense solutions, not the solver's steps).
+SAMPLE_STEP_S = 2.5e-4
 
 
-def joint_stiffness_nm_rad(stance: StanceSimulation) -> np.ndarray:
-    """Per joint (ankle, knee, hip): net moment change over angle change, touchdown to maximal flexion (N m/rad)."""
-    moments = stance.moments_nm  # the net joint moment (with the trunk balance's part at the hip)
-    peak = np.argmax(stance.rho_rad, axis=0)
-    joints = np.arange(3)
-    return (moments[peak, joints] - moments[0]) / (stance.rho_rad[peak, joints] - stance.rho_rad[0])
+def midstance_index(chain: Chain, stance: StanceSimulation) -> int:
+    """Seed 001's midstance: the sample at which the body's COM is lowest."""
+    return int(np.argmin([body_com(chain, g)[1] for g in stance.g]))
+
+
+def joint_stiffness_nm_rad(chain: Chain, stance: StanceSimulation) -> np.ndarray:
+    """Per joint (ankle, knee, hip): net moment change over angle change, touchdown to midstance (N m/rad).
+
+    Seed 001: "joint stiffness as the slope of the relationship between" joint moment and joint angle, plotted in its
+    Fig. 6B as "ankle moment vs. ankle angle change from touch down to midstance", midstance being "the instant that
+    COM reached its lowest value" (:func:`midstance_index`). The net moment includes the trunk balance's at the hip.
+    """
+    i = midstance_index(chain, stance)
+    return (stance.moments_nm[i] - stance.moments_nm[0]) / (stance.rho_rad[i] - stance.rho_rad[0])
 
 
 @dataclass(frozen=True)
 class SurfaceSurprise:
-    """One stance on the expected soft and the unexpected hard surface (same law, same touchdown)."""
+    """One stance on the expected soft and the unexpected hard surface (same prepared law, same touchdown)."""
 
     leg_soft: tuple[float, float, float]  # (stiffness N/m, peak Fz N, compression m), leg_stiffness_n_per_m
     leg_hard: tuple[float, float, float]
@@ -60,6 +103,7 @@ class SurfaceSurprise:
     soft: StanceSimulation | None = None  # the two stances themselves (bench/simulator_seed001_shape.py reads them)
     hard: StanceSimulation | None = None
     push_scale: float = float("nan")  # the soft hop's calibrated push-off scale
+    stiffening: float = 1.0  # the factor on the law's k0, k1 the hopper prepared for the soft surface (anticipate)
 
     @property
     def leg_change(self) -> float:
@@ -87,16 +131,62 @@ def seed001_options(options: dict, keep_pad: bool = False) -> dict:
     return dict(options) if keep_pad else {k: v for k, v in options.items() if k != "pad"}
 
 
+def with_stiffening(options: dict, freq_hz: float, factor: float) -> dict:
+    """``options`` with its law's k0 and k1 (every joint, after its own ``law_scale``) times ``factor`` at ``freq_hz``."""
+    s0, s1 = law_scale_at(options.get("law_scale"), freq_hz)
+    return {**options, "law_scale": {freq_hz: (tuple(s0 * factor), tuple(s1 * factor))}}
+
+
+def anticipated_stiffening(freq_hz: float, options: dict, effects: Effects = Effects(), expected=SOFT,
+                           reference=HARD) -> float:
+    """The factor on the law's k0 and k1 with which its passive stance on ``expected`` (seed 001's soft law) lasts as
+    long as the unscaled law's on ``reference`` (seed 001's hard law): seed 001's "similar COM dynamics, regardless of
+    surface stiffness" (module docstring). 1 when the expected surface's stance is already no longer. ``options``
+    are :func:`~hop_impedance.simulation.scenarios.hopping_config`'s (without a pad: :func:`seed001_options`); the
+    passive stance is the one ``hopping_config`` times the push-off by (no push-off, no bell, its touchdown speed)."""
+    chain, cfg = hopping_config(freq_hz, "soft", 1, effects, variability=False, **options)
+    passive_effects = Effects(**{**effects.to_dict(), "push_off": False})
+
+    def stance_s(ground, factor: float) -> float:
+        scale = with_stiffening(options, freq_hz, factor)["law_scale"]
+        passive = build_law(freq_hz, passive_effects, 0.0, 1.0, options.get("hip_trunk_spring_nm_rad", 0.0),
+                            law_scale=scale)
+        return nominal_stance_s(chain, passive, ground, cfg.touchdown_rho_rad, freq_hz)
+
+    target = stance_s(reference, 1.0)
+
+    def excess(factor: float) -> float:
+        return stance_s(expected, factor) - target
+
+    if excess(1.0) <= 0.0:
+        return 1.0
+    return float(brentq(excess, 1.0, 8.0, xtol=1e-4))
+
+
+def _dense(chain, law, ground, td, stance: StanceSimulation) -> StanceSimulation:
+    """``stance`` resampled every :data:`SAMPLE_STEP_S` from its dense solution (and at its end)."""
+    n = int(np.ceil(stance.duration_s / SAMPLE_STEP_S)) + 1
+    return resample_stance(chain, law, ground, td, stance, np.linspace(0.0, stance.duration_s, n))
+
+
 def unexpected_hard_vs_soft(freq_hz: float = 2.2, effects: Effects = Effects(), keep_pad: bool = False,
+                            anticipate: bool = True, preprogrammed: bool = True, stiffening: float | None = None,
                             **options) -> SurfaceSurprise:
     """Calibrate the hop on the soft surface, then simulate its stance on soft and on hard from the same touchdown.
 
     ``options`` are :func:`~hop_impedance.simulation.scenarios.hopping_config`'s keyword options (e.g.
-    :func:`~hop_impedance.simulation.scenarios.seed_like_options`); no hop-to-hop variability. A ``pad`` among them
-    is dropped (:func:`seed001_options`) unless ``keep_pad``.
+    :func:`~hop_impedance.simulation.scenarios.seed_like_hopper_options`); no hop-to-hop variability. A ``pad`` among
+    them is dropped (:func:`seed001_options`) unless ``keep_pad``. ``anticipate``: the law's springs scaled for the
+    soft surface (:func:`anticipated_stiffening`) before the calibration; ``preprogrammed``: the hard stance's k1 term
+    follows the soft stance's course in time (module docstring). Both False: sessions 12-19's experiment.
+    ``stiffening``: with ``anticipate``, this factor instead of the rule's (a robustness check, not the experiment).
     """
-    chain, cfg = hopping_config(freq_hz, "soft", 1, effects, variability=False,
-                                **seed001_options(options, keep_pad))
+    options = seed001_options(options, keep_pad)
+    factor = 1.0
+    if anticipate:
+        factor = anticipated_stiffening(freq_hz, options, effects) if stiffening is None else float(stiffening)
+        options = with_stiffening(options, freq_hz, factor)
+    chain, cfg = hopping_config(freq_hz, "soft", 1, effects, variability=False, **options)
     q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
     cal = calibrate(chain, cfg, q)
     if not cal.success:
@@ -105,12 +195,17 @@ def unexpected_hard_vs_soft(freq_hz: float = 2.2, effects: Effects = Effects(), 
     law = scale_push_off(cfg.law, cal.push_scale)
     td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
     pad = cfg.surface.pad if isinstance(cfg.surface, PaddedGround) else None  # keep_pad: the pad on both surfaces
-    soft, hard = (simulate_stance(chain, law, with_pad(ground, pad), td, friction_coefficient=cfg.friction_coefficient,
-                                  trunk_balance=cfg.trunk_balance) for ground in (SOFT, HARD))
+    soft_ground, hard_ground = with_pad(SOFT, pad), with_pad(HARD, pad)
+    kw = {"friction_coefficient": cfg.friction_coefficient, "trunk_balance": cfg.trunk_balance}
+    soft = _dense(chain, law, soft_ground, td, simulate_stance(chain, law, soft_ground, td, **kw))
+    hard_law = law
+    if preprogrammed:
+        hard_law = with_prepared_stiffening(law, soft.t_s, soft.rho_rad - soft.rho_rad[0])
+    hard = _dense(chain, hard_law, hard_ground, td, simulate_stance(chain, hard_law, hard_ground, td, **kw))
 
     def flexion(st: StanceSimulation) -> np.ndarray:
         return np.max(st.rho_rad, axis=0) - st.rho_rad[0]
 
     return SurfaceSurprise(leg_stiffness_n_per_m(chain, soft), leg_stiffness_n_per_m(chain, hard),
-                           flexion(hard) - flexion(soft), joint_stiffness_nm_rad(soft), joint_stiffness_nm_rad(hard),
-                           soft, hard, float(cal.push_scale))
+                           flexion(hard) - flexion(soft), joint_stiffness_nm_rad(chain, soft),
+                           joint_stiffness_nm_rad(chain, hard), soft, hard, float(cal.push_scale), factor)

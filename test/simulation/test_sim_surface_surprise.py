@@ -8,32 +8,37 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hop_impedance.simulation.dynamics import body_com
 from hop_impedance.simulation.hopping_trial import touchdown_posture, touchdown_state
 from hop_impedance.simulation.scenarios import Effects, hopping_config, seed_like_options, seed_stiffness, shoe_pad
 from hop_impedance.simulation.stance import simulate_stance
 from hop_impedance.simulation.surface_surprise import (
     SurfaceSurprise,
     joint_stiffness_nm_rad,
+    midstance_index,
     seed001_options,
     unexpected_hard_vs_soft,
 )
 
 
 @pytest.mark.parametrize("k1", [False, True])
-def test_joint_stiffness_is_the_springs_secant_to_maximal_flexion(k1):
+def test_joint_stiffness_is_the_springs_secant_to_midstance(k1):
     """Without damping, push-off, activation or trunk balance the moment is the Eq. 3 spring
-    M = k0 dr + k1 dr^2 / 2, so the slope from touchdown to maximal flexion is k0 + k1 dr_max / 2
-    (k0 alone without k1), whatever the stance's dynamics."""
+    M = k0 dr + k1 dr^2 / 2, so the slope from touchdown to midstance (seed 001: the COM's lowest point) is
+    k0 + k1 dr_mid / 2 (k0 alone without k1), whatever the stance's dynamics."""
     effects = Effects(angle_dependent_stiffness=k1, damping=False, push_off=False)
     chain, cfg = hopping_config(2.2, "hard", 1, effects, variability=False)
     q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
     st = simulate_stance(chain, cfg.law, cfg.surface, touchdown_state(chain, q, np.array([0.0, -1.2]), 0.0),
                          sample_times_s=np.linspace(0.0, 0.3, 3001))
+    i = midstance_index(chain, st)
+    com_z = [body_com(chain, g)[1] for g in st.g]
+    assert com_z[i] == min(com_z) and 0 < i < len(st.t_s) - 1
     k0, k1_law = seed_stiffness(2.2)
-    dr_max = st.rho_rad.max(axis=0) - st.rho_rad[0]
-    assert np.all(dr_max > 0.05)  # every joint flexes
-    expected = k0 + (k1_law * dr_max / 2.0 if k1 else 0.0)
-    np.testing.assert_allclose(joint_stiffness_nm_rad(st), expected, rtol=1e-6)
+    dr_mid = st.rho_rad[i] - st.rho_rad[0]
+    assert np.all(dr_mid > 0.05)  # every joint has flexed by midstance
+    expected = k0 + (k1_law * dr_mid / 2.0 if k1 else 0.0)
+    np.testing.assert_allclose(joint_stiffness_nm_rad(chain, st), expected, rtol=1e-6)
 
 
 def test_directions_read_the_relative_changes():
@@ -52,10 +57,11 @@ def test_directions_read_the_relative_changes():
 
 def test_seed_001_laws_are_met_without_the_shoe_pad():
     """Seed 001's surface laws were fitted at the MTP5 marker (surface_surprise's module docstring), so its
-    comparison drops the hopper's shoe pad: with issue 17's rigid-plate candidate (15 mm n 3 pad, bell a_min 0.9,
-    its calibrated law) the 2.2 Hz hop on the bare soft law exists and leg stiffness falls on the unexpected hard
-    surface (measured -4.3 %, 19.7 -> 18.9 kN/m), while the pad in series with the soft law (keep_pad, session 11) has no periodic
-    2.2 Hz hop (closest: 424 ms stance, 42 ms flight)."""
+    comparison drops the hopper's shoe pad (sessions 12-19's experiment, without the soft surface's anticipation or
+    the pre-programmed k1: ``anticipate=False, preprogrammed=False``): with issue 17's rigid-plate candidate (15 mm
+    n 3 pad, bell a_min 0.9, its calibrated law) the 2.2 Hz hop on the bare soft law exists and leg stiffness falls
+    on the unexpected hard surface (measured -4.3 %, 19.7 -> 18.9 kN/m), while the pad in series with the soft law
+    (keep_pad, session 11) has no periodic 2.2 Hz hop (closest: 424 ms stance, 42 ms flight)."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
     try:
         from simulator_issue17 import LAW_SCALES
@@ -64,7 +70,8 @@ def test_seed_001_laws_are_met_without_the_shoe_pad():
     options = {**seed_like_options(), "bell_activation_min": 0.9, "law_scale": LAW_SCALES["bell09_rigid_pad15_3"],
                "pad": shoe_pad(0.015, 3.0)}
     assert "pad" not in seed001_options(options) and seed001_options(options, keep_pad=True)["pad"] is options["pad"]
-    s = unexpected_hard_vs_soft(2.2, **options)
+    legacy = {"anticipate": False, "preprogrammed": False}
+    s = unexpected_hard_vs_soft(2.2, **legacy, **options)
     (k_soft, f_soft, x_soft), (k_hard, f_hard, x_hard) = s.leg_soft, s.leg_hard
     assert k_soft == pytest.approx(f_soft / x_soft) and k_hard == pytest.approx(f_hard / x_hard)
     assert k_hard < 0.98 * k_soft and x_hard > x_soft  # the leg gives more on the surface that gives less
@@ -73,4 +80,4 @@ def test_seed_001_laws_are_met_without_the_shoe_pad():
     assert s.soft.grf_n[:, 1].max() == pytest.approx(f_soft) and s.hard.grf_n[:, 1].max() == pytest.approx(f_hard)
     assert s.hard.t_s[-1] < s.soft.t_s[-1] and 0.0 < s.push_scale < 2.0
     with pytest.raises(ValueError, match="no calibrated hop on the soft surface"):
-        unexpected_hard_vs_soft(2.2, keep_pad=True, **options)
+        unexpected_hard_vs_soft(2.2, keep_pad=True, **legacy, **options)

@@ -1,0 +1,97 @@
+"""Seed 001 on the seed-like preset (issue 17, session 20): the hopper prepared for the soft surface.
+
+``surface_surprise.unexpected_hard_vs_soft`` prepares the hopper for the expected soft surface in two ways that seed
+001 names (its module docstring): the springs scaled so that the soft stance lasts as long as the hard one
+(``anticipate``), and Eq. 3's k1 rise pre-programmed in time along the expected stance (``preprogrammed``,
+``impedance_laws.PreparedStiffening``). Figures measured 2026-11-29 (docs/simulator.md, session 20).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hop_impedance.simulation.ground import HARD, SOFT
+from hop_impedance.simulation.hopping_trial import touchdown_posture, touchdown_state
+from hop_impedance.simulation.impedance_laws import (
+    BellActivation,
+    CompositeLaw,
+    Eq3Law,
+    PreparedStiffening,
+    PushOff,
+    TouchdownReference,
+    with_prepared_stiffening,
+)
+from hop_impedance.simulation.scenarios import Effects, hopping_config, seed_like_hopper_options
+from hop_impedance.simulation.stance import resample_stance, simulate_stance
+from hop_impedance.simulation.surface_surprise import unexpected_hard_vs_soft
+
+
+def test_prepared_k1_is_eq3_along_the_expected_course_and_lower_when_flexing_earlier():
+    """Expected course dr = 2 t (rad): along it S = int dr_exp omega dt = dr^2 / 2 (Eq. 3's k1 term); a joint flexing
+    twice as fast (dr = 4 t) reaches the same angle at half the time with S = int 2 t * 4 dt = 4 t^2 = dr^2 / 4,
+    half Eq. 3's, so its k1 moment is half at that angle; the activation scales it as it scales Eq. 3's."""
+    t = np.linspace(0.0, 0.3, 301)
+    bell = BellActivation(0.9, 0.3)
+    law = PreparedStiffening(np.array([1000.0, 500.0, 200.0]), t, np.repeat(2.0 * t[:, None], 3, axis=1), bell)
+    ref = TouchdownReference(np.zeros(3), np.zeros(3))
+    for rate in (2.0, 4.0):  # expected, then twice as fast
+        omega = np.full(3, rate)
+        s_dot = law.state_rates(t, rate * t[:, None] * np.ones(3), np.broadcast_to(omega, (len(t), 3)), None, ref)
+        s = np.concatenate([np.zeros((1, 3)), np.cumsum((s_dot[1:] + s_dot[:-1]) / 2 * np.diff(t)[:, None], axis=0)])
+        dr = rate * t
+        np.testing.assert_allclose(s[:, 0], dr**2 / 2 if rate == 2.0 else dr**2 / 4, atol=1e-12)
+    m = law.moments_nm(np.array(0.1), np.zeros(3), np.zeros(3), np.array([0.02, 0.02, 0.02]), ref)
+    np.testing.assert_allclose(m, bell.value(0.1) * np.array([1000.0, 500.0, 200.0]) * 0.02)
+    np.testing.assert_allclose(law.expected_dr(np.array([0.5])), [[0.6, 0.6, 0.6]])  # held after the course's end
+    with pytest.raises(ValueError):
+        PreparedStiffening(np.ones(3), t[::-1], np.zeros((301, 3)))
+    assert law.to_dict()["type"] == "prepared_stiffening"
+
+
+def test_prepared_law_repeats_the_expected_stance_and_softens_the_unexpected_one():
+    """The default hopper's 2.2 Hz law (Eq. 3 with k1, damping, push-off) on the soft surface, then with its k1
+    pre-programmed along that stance: on soft the same stance (measured: angles within 3e-7 rad, moments within 6e-5
+    N m); on hard the ankle's peak moment over its range of flexion is lower than with Eq. 3's angle law (measured 470
+    against 522 N m/rad, -10 %)."""
+    chain, cfg = hopping_config(2.2, "soft", 1, Effects(), variability=False)
+    q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
+    td = touchdown_state(chain, q, np.array([0.0, -1.0]), 0.0)
+    soft = simulate_stance(chain, cfg.law, SOFT, td)
+    soft = resample_stance(chain, cfg.law, SOFT, td, soft, np.linspace(0.0, soft.duration_s, 1201))
+    prepared = with_prepared_stiffening(cfg.law, soft.t_s, soft.rho_rad - soft.rho_rad[0])
+    assert isinstance(prepared, CompositeLaw) and [type(p) for p in prepared.parts] == [Eq3Law, PreparedStiffening,
+                                                                                          PushOff]
+    assert np.all(prepared.parts[0].k1 == 0) and np.all(prepared.parts[1].k1 == cfg.law.parts[0].k1)
+    again = simulate_stance(chain, prepared, SOFT, td)
+    again = resample_stance(chain, prepared, SOFT, td, again, soft.t_s)
+    assert again.duration_s == pytest.approx(soft.duration_s, abs=1e-4)
+    np.testing.assert_allclose(again.rho_rad, soft.rho_rad, atol=1e-5)
+    np.testing.assert_allclose(again.moments_nm, soft.moments_nm, atol=1e-3)
+    angle_law, pre = simulate_stance(chain, cfg.law, HARD, td), simulate_stance(chain, prepared, HARD, td)
+    k_angle = [np.max(st.moments_nm[:, 0]) / np.max(st.rho_rad[:, 0] - st.rho_rad[0, 0]) for st in (angle_law, pre)]
+    assert k_angle[1] == pytest.approx(0.90 * k_angle[0], rel=0.01)
+
+
+@pytest.mark.parametrize("freq, factor, leg, extra, joint", [
+    (2.2, 1.876, -0.134, (0.065, 0.034, 0.008), (-0.078, -0.042, -0.041)),
+    (1.53, 1.164, -0.054, (0.044, 0.024, 0.011), (-0.030, -0.027, 0.003)),
+])
+def test_seed_like_preset_reproduces_seed_001(freq, factor, leg, extra, joint):
+    """The bundled recordings' preset, prepared for the soft surface, on seed 001's unexpected hard surface: every
+    direction holds (leg stiffness falls, ankle and knee flex more, the hip less, joint stiffness to midstance falls
+    most at the ankle), with a 2.2 Hz hop on the soft law (none without the anticipation: closest 437 ms stance)."""
+    s = unexpected_hard_vs_soft(freq, **seed_like_hopper_options())
+    assert s.stiffening == pytest.approx(factor, abs=0.005)
+    assert s.leg_change == pytest.approx(leg, abs=0.005)
+    np.testing.assert_allclose(s.extra_flexion_rad, extra, atol=0.003)
+    np.testing.assert_allclose(s.joint_change, joint, atol=0.003)
+    assert all(s.directions().values())
+    assert s.hard.duration_s < s.soft.duration_s
+
+
+def test_without_the_anticipation_the_preset_has_no_2_2_hz_hop_on_seed_001s_soft_law():
+    """Sessions 12-19's figure: the law prepared for the hard plate, put on the soft law unchanged, keeps the foot down
+    for 437 ms of the 455 ms period."""
+    with pytest.raises(ValueError, match=r"closest: stance 43\d ms"):
+        unexpected_hard_vs_soft(2.2, anticipate=False, **seed_like_hopper_options())
