@@ -34,7 +34,8 @@ row is measured on these three recordings except seed 001's (one stance pair per
   joint); seed Fig. 7: the mean maximal against the mean initial stiffness of the 9 joints x frequencies on one
   straight line, r^2 >= 0.9 (``impedance.seed_findings.fig7_line``; the seed's points are these means, the
   demo's the stances of one recording);
-- seed 001's directions on an unexpected hard surface (``simulation.surface_surprise``).
+- seed 001's directions on an unexpected hard surface (``simulation.surface_surprise``: the hopper prepared for the
+  expected soft surface, session 20).
 
 Takes ~2 min at load ~1 on two cores.
 """
@@ -277,7 +278,10 @@ def fit_rows(measures: dict) -> list[Row]:
 
 def seed001_rows(options: dict, freqs=FREQS, keep_pad: bool = False) -> list[Row]:
     """Seed 001's directions at each frequency (one stance pair, soft expected, hard unexpected), on seed 001's
-    surface laws without the variant's shoe pad unless ``keep_pad`` (``surface_surprise.seed001_options``)."""
+    surface laws without the variant's shoe pad unless ``keep_pad`` (``surface_surprise.seed001_options``), the hopper
+    prepared for the soft surface (``surface_surprise``'s module docstring: springs scaled for it, k1 pre-programmed
+    in time), joint stiffness read from touchdown to midstance as seed 001 defines it (one decimal: at 1.53 Hz the
+    ankle's and knee's falls differ by tenths of a point)."""
     surprise, failed = {}, {}
     for f in freqs:
         try:
@@ -287,7 +291,7 @@ def seed001_rows(options: dict, freqs=FREQS, keep_pad: bool = False) -> list[Row
     figures = {
         "leg stiffness falls": lambda s: percent(s.leg_change),
         "ankle and knee flex more, the hip less": lambda s: "/".join(f"{v:+.3f}" for v in s.extra_flexion_rad) + " rad",
-        "joint stiffness falls most at the ankle": lambda s: "/".join(percent(v) for v in s.joint_change),
+        "joint stiffness falls most at the ankle": lambda s: "/".join(f"{100 * v:+.1f} %" for v in s.joint_change),
     }
     rows = []
     for name, fmt in figures.items():
