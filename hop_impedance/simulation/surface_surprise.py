@@ -18,7 +18,7 @@ Definitions (seed 001's Methods, "Definitions", following its refs. 12 and 23):
   :func:`joint_stiffness_nm_rad` is the net moment's change over the angle's change from touchdown to midstance (the
   COM's lowest point), the hip's net moment including the trunk balance. Until session 20 it was read to each joint's
   maximal flexion instead, which is not the paper's quantity: the ankle and knee flex maximally near midstance, but
-  the hip some 3-10 % of the stance after it (docs/simulator.md, session 20). "Falls most" is read relatively
+  the hip 3-13 % of the stance after it (docs/simulator.md, session 20). "Falls most" is read relatively
   (hard / soft - 1), since the three joints' stiffnesses differ several-fold.
 
 What the hopper prepares before landing (session 20; ``anticipate`` and ``preprogrammed``, both on by default; both
