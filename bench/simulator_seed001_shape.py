@@ -65,9 +65,11 @@ def main() -> None:
                         help="the hard stance's k1 by angle (Eq. 3), not along the soft stance's time course")
     parser.add_argument("--stiffening", type=float, default=None, metavar="F",
                         help="this factor on the springs for the soft surface instead of the rule's (a robustness check)")
+    parser.add_argument("--expected", choices=("soft", "hard"), default="soft",
+                        help="the surface the hopper prepares for (hard: seed 001's unexpected soft surface)")
     args = parser.parse_args()
     prepared = {"anticipate": not args.no_anticipate, "preprogrammed": not args.no_preprogrammed,
-                "stiffening": args.stiffening}
+                "stiffening": args.stiffening, "expected": args.expected}
     for f in s17.floats(args.freqs):
         for timing in args.timings:
             options, _ = s17.variant_options(s17.VariantArgs(**{**vars(args), "push_timing": timing}))
@@ -76,10 +78,10 @@ def main() -> None:
             except ValueError as exc:
                 print(f"{f:4.2f} Hz, push-off {timing}: {exc}", flush=True)
                 continue
-            chain, _ = hopping_config(f, "soft", 1, variability=False, **seed001_options(options))  # the body
+            chain, _ = hopping_config(f, args.expected, 1, variability=False, **seed001_options(options))  # the body
             held = [k for k, v in s.directions().items() if v]
-            print(f"{f:4.2f} Hz, push-off {timing} (springs x {s.stiffening:.3f} for soft; soft hop's push-off scale "
-                  f"{s.push_scale:.2f}): leg stiffness "
+            print(f"{f:4.2f} Hz, push-off {timing} (springs x {s.stiffening:.3f} for {args.expected}; "
+                  f"{args.expected} hop's push-off scale {s.push_scale:.2f}): leg stiffness "
                   f"{100 * s.leg_change:+.1f} % on hard; extra flexion ankle / knee / hip "
                   + " / ".join(f"{v:+.3f}" for v in s.extra_flexion_rad) + " rad; joint stiffness "
                   + " / ".join(f"{100 * v:+.1f}" for v in s.joint_change) + f" %; directions held: {held or 'none'}")

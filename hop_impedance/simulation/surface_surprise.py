@@ -41,6 +41,9 @@ off is sessions 12-19's experiment):
   and the push-off were already fixed in time; the touchdown state, the trunk balance and the push-off's calibrated
   amplitude are the soft hop's on both surfaces.
 
+``expected="hard"`` is seed 001's other transition (prepared for hard, landing on soft: "opposite effects"); the
+hard law needs no anticipation (factor 1), and the figures stay hard against soft, so the same directions hold.
+
 Contact (choice, issue 17 session 12; tested in test/simulation/test_sim_surface_surprise.py): seed 001's two surface
 laws are the foot-surface interaction itself, not the surface alone. Its Methods: "The coefficients for these
 equations were based on an optimized fit of the subject's fifth metatarsophalangeal joint (MTP5) movement after
@@ -171,37 +174,47 @@ def _dense(chain, law, ground, td, stance: StanceSimulation) -> StanceSimulation
 
 def unexpected_hard_vs_soft(freq_hz: float = 2.2, effects: Effects = Effects(), keep_pad: bool = False,
                             anticipate: bool = True, preprogrammed: bool = True, stiffening: float | None = None,
-                            **options) -> SurfaceSurprise:
-    """Calibrate the hop on the soft surface, then simulate its stance on soft and on hard from the same touchdown.
+                            expected: str = "soft", **options) -> SurfaceSurprise:
+    """Calibrate the hop on the expected surface, then simulate its stance on soft and on hard from the same touchdown.
 
     ``options`` are :func:`~hop_impedance.simulation.scenarios.hopping_config`'s keyword options (e.g.
     :func:`~hop_impedance.simulation.scenarios.seed_like_hopper_options`); no hop-to-hop variability. A ``pad`` among
     them is dropped (:func:`seed001_options`) unless ``keep_pad``. ``anticipate``: the law's springs scaled for the
-    soft surface (:func:`anticipated_stiffening`) before the calibration; ``preprogrammed``: the hard stance's k1 term
-    follows the soft stance's course in time (module docstring). Both False: sessions 12-19's experiment.
-    ``stiffening``: with ``anticipate``, this factor instead of the rule's (a robustness check, not the experiment).
+    expected surface (:func:`anticipated_stiffening`; x 1 when it is the hard one) before the calibration;
+    ``preprogrammed``: the unexpected stance's k1 term follows the expected stance's course in time (module
+    docstring). Both False: sessions 12-19's experiment. ``stiffening``: with ``anticipate``, this factor instead of
+    the rule's (a robustness check, not the experiment). ``expected``: "soft" (default, seed 001's unexpected hard
+    surface) or "hard" (its unexpected soft surface, whose "effects [are] opposite": the figures stay hard against
+    soft, so the same :meth:`SurfaceSurprise.directions` hold).
     """
+    if expected not in ("soft", "hard"):
+        raise ValueError(f"expected must be 'soft' or 'hard', got {expected!r}")
     options = seed001_options(options, keep_pad)
+    expected_law, unexpected_law = (SOFT, HARD) if expected == "soft" else (HARD, SOFT)
     factor = 1.0
     if anticipate:
-        factor = anticipated_stiffening(freq_hz, options, effects) if stiffening is None else float(stiffening)
+        factor = (anticipated_stiffening(freq_hz, options, effects, expected=expected_law) if stiffening is None
+                  else float(stiffening))
         options = with_stiffening(options, freq_hz, factor)
-    chain, cfg = hopping_config(freq_hz, "soft", 1, effects, variability=False, **options)
+    chain, cfg = hopping_config(freq_hz, expected, 1, effects, variability=False, **options)
     q = touchdown_posture(chain, np.array(cfg.touchdown_rho_rad))
     cal = calibrate(chain, cfg, q)
     if not cal.success:
-        raise ValueError(f"{freq_hz} Hz: no calibrated hop on the soft surface (closest: stance {1000 * cal.stance_s:.0f} ms, "
-                         f"flight {1000 * cal.flight_s:.0f} ms at touchdown speed {cal.speed_m_s:.2f} m/s)")
+        raise ValueError(f"{freq_hz} Hz: no calibrated hop on the {expected} surface (closest: stance "
+                         f"{1000 * cal.stance_s:.0f} ms, flight {1000 * cal.flight_s:.0f} ms at touchdown speed "
+                         f"{cal.speed_m_s:.2f} m/s)")
     law = scale_push_off(cfg.law, cal.push_scale)
     td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
     pad = cfg.surface.pad if isinstance(cfg.surface, PaddedGround) else None  # keep_pad: the pad on both surfaces
-    soft_ground, hard_ground = with_pad(SOFT, pad), with_pad(HARD, pad)
+    expected_ground, unexpected_ground = with_pad(expected_law, pad), with_pad(unexpected_law, pad)
     kw = {"friction_coefficient": cfg.friction_coefficient, "trunk_balance": cfg.trunk_balance}
-    soft = _dense(chain, law, soft_ground, td, simulate_stance(chain, law, soft_ground, td, **kw))
-    hard_law = law
+    prepared = _dense(chain, law, expected_ground, td, simulate_stance(chain, law, expected_ground, td, **kw))
+    surprise_law = law
     if preprogrammed:
-        hard_law = with_prepared_stiffening(law, soft.t_s, soft.rho_rad - soft.rho_rad[0])
-    hard = _dense(chain, hard_law, hard_ground, td, simulate_stance(chain, hard_law, hard_ground, td, **kw))
+        surprise_law = with_prepared_stiffening(law, prepared.t_s, prepared.rho_rad - prepared.rho_rad[0])
+    surprised = _dense(chain, surprise_law, unexpected_ground, td,
+                       simulate_stance(chain, surprise_law, unexpected_ground, td, **kw))
+    soft, hard = (prepared, surprised) if expected == "soft" else (surprised, prepared)
 
     def flexion(st: StanceSimulation) -> np.ndarray:
         return np.max(st.rho_rad, axis=0) - st.rho_rad[0]

@@ -95,3 +95,18 @@ def test_without_the_anticipation_the_preset_has_no_2_2_hz_hop_on_seed_001s_soft
     for 437 ms of the 455 ms period."""
     with pytest.raises(ValueError, match=r"closest: stance 43\d ms"):
         unexpected_hard_vs_soft(2.2, anticipate=False, **seed_like_hopper_options())
+
+
+def test_prepared_for_hard_the_unexpected_soft_surface_has_the_opposite_effects():
+    """Seed 001's other transition (expected hard, unexpected soft: "opposite effects"), 2.2 Hz: no anticipation
+    needed (factor 1); read hard against soft the leg is 11.3 % less stiff on the hard surface (the unexpected soft
+    one stiffer), the ankle and knee flex 0.071 / 0.032 rad more on hard, the ankle's joint stiffness 5.7 % lower.
+    (With k1 following the angle instead, ``preprogrammed=False``, the leg stiffness does not change, +0.1 %, and the
+    ankle's and knee's joint stiffness are higher on hard, +3.3 / +4.9 %: bench/simulator_seed001_shape.py
+    --expected hard --no-preprogrammed, docs/simulator.md session 20.)"""
+    s = unexpected_hard_vs_soft(2.2, expected="hard", **seed_like_hopper_options())
+    assert s.stiffening == 1.0 and s.soft.duration_s > s.hard.duration_s
+    assert s.leg_change == pytest.approx(-0.113, abs=0.005)
+    np.testing.assert_allclose(s.extra_flexion_rad, (0.071, 0.032, 0.008), atol=0.003)
+    np.testing.assert_allclose(s.joint_change, (-0.057, -0.035, 0.009), atol=0.003)
+    assert all(s.directions().values())
