@@ -29,11 +29,31 @@ row is measured on these three recordings except seed 001's (one stance pair per
   >= 80 % of the stances;
 - the per-stance fit with the seed's k0, k1, b0 (``fit_calibration.seed_model_fits``, the stances after the
   first): median k0 and k1 within 15 % of Table 2 at ankle and knee; K(t) bell-shaped with non-zero edges
-  (maximum inside the stance, K > 0 at touchdown and take-off) in every stance at ankle and knee; the
-  variable-stiffness error below the constant stiffness's (seed Table 3's metric, mean over stances, every
-  joint); seed Fig. 7: the mean maximal against the mean initial stiffness of the 9 joints x frequencies on one
-  straight line, r^2 >= 0.9 (``impedance.seed_findings.fig7_line``; the seed's points are these means, the
-  demo's the stances of one recording);
+  (maximum inside the stance, K > 0 at touchdown and take-off) in >= 80 % of the stances at ankle and knee
+  (:data:`BELL_SHARE`); the variable-stiffness error below the constant stiffness's (seed Table 3's metric, mean
+  over stances, every joint); seed Fig. 7: the mean maximal against the mean initial stiffness of the 9 joints x
+  frequencies on one straight line, r^2 >= 0.9 (``impedance.seed_findings.fig7_line``; the seed's points are
+  these means, the demo's the stances of one recording);
+
+What the two shape rows read, against seed 000's definitions (session 20, docs/simulator.md "the knee's bell and
+Fig. 7"):
+
+- K(t) is the fitted stiffness of the reduced model, Eq. 10 K = k0 + k1 (rho - rho0) with constant damping b0, over
+  the whole stance from touchdown (rho0: "their values at the beginning of the stance phase") to take-off ("n is
+  the total number of sample points during the stance phase"; Table 3's N = 22 / 18 / 14 at 50 Hz is the whole
+  stance), under Eq. 7's K >= 0: "Stiffness/time curves were obtained by the QP optimization procedure ...
+  nonzero stiffness values are noticed both at the touchdown and take-off instants of the stance phase. The
+  stiffness reaches its maximum value at mid-stance". A K(t) on the K >= 0 bound at take-off is therefore not a
+  non-zero edge. The share: the seed calls the shape typical ("Typically, the stiffness profiles were
+  bell-shaped with a maximum near mid-stance"; Fig. 5, "Typical stiffness/time curves"), and issue 17 lists it
+  with the F-test's count, "at ankle and knee in >= 80 % of stances of noise-free 10-hop trials"; until session
+  20 this row read "every stance".
+- Fig. 7: "a plot of the average maximal stiffness versus the average initial stiffness for each of the joints
+  and the hopping frequencies", "the maximal stiffness of each joint during the ground-contact phase" against
+  "the initial joint stiffness" (K at touchdown, k0, the "pre-activation"): per joint and frequency the mean over
+  stances of the fitted K(t)'s value at touchdown and of its largest value over the stance, the hip's from the
+  net hip moment of inverse dynamics as the seed's ("The joint moments were computed from inverse dynamics"),
+  i.e. whatever holds the trunk included, not Table 2's hip law through Table 1's ranges;
 - seed 001's directions on an unexpected hard surface (``simulation.surface_surprise``: the hopper prepared for the
   expected soft surface, session 20).
 
@@ -81,6 +101,9 @@ FREQS = tuple(SEED_TABLE1)
 JOINTS = ("ankle", "knee", "hip")
 #: Issue 17's thresholds.
 K1_KEPT_SHARE = 0.8
+#: The share of stances whose K(t) is a bell with non-zero edges (module docstring: the seed's "Typically", issue
+#: 17's ">= 80 % of stances"; "every stance" until session 20).
+BELL_SHARE = 0.8
 FIT_BAND = 0.15
 FIG7_R2 = 0.9
 MAX_CELLS_OUT = 3
@@ -261,8 +284,8 @@ def fit_rows(measures: dict) -> list[Row]:
     for j in ("ankle", "knee"):
         share = {f: m.bell_share[j] for f, m in measures.items()}
         rows.append(Row(f"K(t) bell-shaped with non-zero edges, {j}",
-                        ", ".join(f"{f:g} Hz {s:.0%}" for f, s in share.items()), "every stance",
-                        all(s == 1.0 for s in share.values())))
+                        ", ".join(f"{f:g} Hz {s:.0%}" for f, s in share.items()), f">= {BELL_SHARE:.0%} of stances",
+                        all(s >= BELL_SHARE for s in share.values())))
     for j in JOINTS:
         ratio = {f: m.table3[j][0] / m.table3[j][1] for f, m in measures.items()}
         rows.append(Row(f"Table 3 error, variable / constant stiffness, {j}",
@@ -385,6 +408,10 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--push-weights", metavar="A,K,H",
                         help="the push-off's amplitude per joint in units of scenarios.PUSH_OFF_BASE_NM instead of 1,0.6,0.3 "
                              "(a negative knee share: the gastrocnemius' knee flexor moment)")
+    parser.add_argument("--flight", choices=("prescribed", "energy_keeping"), default=None,
+                        help="the flight model (hopping_trial.py): energy_keeping returns the segments' motion and the "
+                             "springs' energy at take-off at the next touchdown instead of discarding them (issue 17: "
+                             "the push-off only replaces real losses); default the options' own (prescribed)")
 
 
 def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
@@ -428,6 +455,9 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     if args.push_weights:
         options["push_weights"] = floats(args.push_weights, 3)
         said.append(f"push-off weights {args.push_weights}")
+    if args.flight:
+        options["flight"] = args.flight
+        said.append(f"flight {args.flight}")
     return options, f"scenarios.{'seed_like_hopper_options' if preset else 'seed_like_options'}(), " + ", ".join(said)
 
 
