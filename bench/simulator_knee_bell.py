@@ -42,7 +42,7 @@ def shape(fit) -> str:
     if not fit.ok:
         return f"rejected ({fit.rejection_reason})"
     why = s17.bell_shape_failure(fit.stiffness)
-    return f"bell (take-off {fit.stiffness[-1]:.0f})" if not why else why
+    return f"bell (take-off {fit.stiffness[-1]:.3g})" if not why else why
 
 
 def frequency_lines(freq_hz: float, options: dict, surface: str) -> list[str]:
