@@ -223,8 +223,9 @@ def bell_shape_failure(stiffness: np.ndarray, edge_floor: float = BELL_EDGE_FLOO
     The seed: "nonzero stiffness values are noticed both at the touchdown and take-off instants of the stance
     phase". A K(t) that the QP holds on its bound is zero there, whichever side of zero the solver's last digits
     fall on (session 13: the row passed or failed on that sign; until session 20 it read ``K <= 0``, so a bound
-    reached at +1e-6 N m/rad counted as a non-zero edge). Edges that are not on the bound are tens of N m/rad (the
-    knee's 21-94 at 1.87 and 2.2 Hz), so any floor between 1e-3 N m/rad and 5 % of the maximum reads alike."""
+    reached at +3e-14 N m/rad counted as a non-zero edge). The preset's knee edges that are not on the bound are
+    56-142 N m/rad (bench/simulator_knee_bell.py), so at the knee any floor between 1e-3 N m/rad and 5 % of the
+    maximum reads alike."""
     peak = int(np.argmax(stiffness))
     why = []
     if not 0 < peak < len(stiffness) - 1:

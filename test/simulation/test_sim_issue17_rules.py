@@ -75,7 +75,7 @@ def test_bell_shape_failure_names_the_edge_or_the_sign(issue17):
 def test_bell_edge_on_the_bound_is_zero_whatever_its_sign(issue17):
     """Session 20: a take-off edge the QP holds on K >= 0 is a zero edge at +1e-6 as at -1e-6 N m/rad (the row used to
     count the first as non-zero); an edge below 1 % of the maximum is on the bound, one of 2-4 % is not (the
-    simulated knee's non-zero edges are 21-94 N m/rad against maxima of 330-510)."""
+    preset's knee edges off the bound are 56-142 N m/rad, bench/simulator_knee_bell.py)."""
     t = np.linspace(0.0, 1.0, 101)
     bell = 200.0 + 200.0 * np.sin(np.pi * t) ** 2  # maximum 400
     for edge in (1e-6, -1e-6, 0.0, 1.5):
