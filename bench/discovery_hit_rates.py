@@ -45,7 +45,9 @@ seed 000's Eq. 7, K >= 0 and B >= 0 on the training samples; session 16's option
 corrected on the stance's first W s of joint angles; session 17's option, off by default); ``--gate-per-signal`` /
 ``--no-gate-per-signal``: ``stiffness_gate.GATE_PER_SIGNAL`` (session 17; on by default since its end); ``--energy-pairs``:
 ``forward_selection.ENERGY_PAIRS`` (session 19's option: a loss and the push-off replacing it tried together when no
-single candidate passes); set in this
+single candidate passes); ``--velocity-fit-shared`` / ``--accept-step``: ``forward_selection.VELOCITY_FIT_SHARED`` /
+``VELOCITY_FIT_ACCEPT`` (session 20's sub-options of the velocity fit: one fitted state per stance for every model;
+the step checked); set in this
 process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
@@ -170,6 +172,11 @@ def main() -> None:
     ap.add_argument("--energy-pairs", action="store_true",
                     help="forward_selection.ENERGY_PAIRS = True (session 19's option): when no single candidate passes, "
                          "a loss and the push-off that replaces it tried together")
+    ap.add_argument("--velocity-fit-shared", action="store_true",
+                    help="forward_selection.VELOCITY_FIT_SHARED = True (session 20): every model simulated from the "
+                         "velocities fitted once per stance under its reference law")
+    ap.add_argument("--accept-step", action="store_true",
+                    help="forward_selection.VELOCITY_FIT_ACCEPT = True (session 20): the velocity step checked")
     ap.add_argument("--gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = True (session 17's option): the gate also passes a candidate "
                          "significantly better on one sampled signal (Bonferroni over the 7) and worse on none; "
@@ -217,6 +224,8 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--touchdown-velocity-fit", forward_selection, "TOUCHDOWN_VELOCITY_FIT_S", args.touchdown_velocity_fit),
             ("--angle-terms", model, "ANGLE_TERMS", tuple(args.angle_terms.split(",")) if args.angle_terms else None),
             ("--energy-pairs", forward_selection, "ENERGY_PAIRS", True if args.energy_pairs else None),
+            ("--velocity-fit-shared", forward_selection, "VELOCITY_FIT_SHARED", True if args.velocity_fit_shared else None),
+            ("--accept-step", forward_selection, "VELOCITY_FIT_ACCEPT", True if args.accept_step else None),
             ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
             ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None)):
         if value is None:

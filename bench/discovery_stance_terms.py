@@ -15,10 +15,11 @@ held-out gap was 2.96 against 0.92, from three stances that take off far too ear
 round's held-out screen (p, pooled shrink) and the stiffness gate's p.
 
 ``--accept-step`` / ``--own-ground-jacobian`` (session 20): the fit's sub-options
-``forward_selection.VELOCITY_FIT_ACCEPT`` / ``VELOCITY_JACOBIAN_OWN_GROUND`` on the runs with the fit.
+``forward_selection.VELOCITY_FIT_ACCEPT`` / ``VELOCITY_JACOBIAN_OWN_GROUND`` on the runs with the fit;
+``--shared`` ``VELOCITY_FIT_SHARED`` (one fitted state per stance for every model).
 
 Usage: .venv/bin/python bench/discovery_stance_terms.py REC.mcap [--touchdown-velocity-fit 0.06] [--stances 5,6,8]
-       [--discover] [--accept-step] [--own-ground-jacobian]
+       [--discover] [--accept-step] [--own-ground-jacobian] [--shared]
 """
 
 from __future__ import annotations
@@ -42,7 +43,9 @@ def main() -> None:
     ap.add_argument("--accept-step", action="store_true", help="forward_selection.VELOCITY_FIT_ACCEPT")
     ap.add_argument("--own-ground-jacobian", action="store_true",
                     help="forward_selection.VELOCITY_JACOBIAN_OWN_GROUND")
+    ap.add_argument("--shared", action="store_true", help="forward_selection.VELOCITY_FIT_SHARED")
     args = ap.parse_args()
+    fs.VELOCITY_FIT_SHARED = args.shared
     fs.VELOCITY_FIT_ACCEPT = args.accept_step  # module options: set before any evaluator forks its workers
     fs.VELOCITY_JACOBIAN_OWN_GROUND = args.own_ground_jacobian
     rec = load_recording(args.recording)
@@ -69,7 +72,7 @@ def main() -> None:
             fs.TOUCHDOWN_VELOCITY_FIT_S = window
             doc = discover(rec)
             print(f"discover, fit {window}: named {doc['effects_found'] or 'nothing'}, baseline gap "
-                  f"{doc['baseline_gap']['total']:.3f}")
+                  f"{doc['baseline_gap']['total']:.3f}, {doc['timing']['total_s']:.0f} s")
             for r, rnd in enumerate(doc["selection"]["rounds"]):
                 print(f"  round {r} screen: " + ", ".join(f"{e} p {v['p_value']:.2g} shrink {100 * v['held_out_shrink']:+.0f} %"
                                                           for e, v in rnd.items() if v["held_out_shrink"] > 0))

@@ -142,6 +142,11 @@ VELOCITY_FIT_HALVINGS = 2
 #: so that the toe's vertical velocity acts on the window as that model's ground makes it act. Measured with
 #: :data:`VELOCITY_FIT_ACCEPT` on the bundled 2.2 Hz trial: changes no decision (docs "Session 20").
 VELOCITY_JACOBIAN_OWN_GROUND = False
+#: Every model simulated from the same fitted velocities: the step under the stance's reference law
+#: (:func:`shared_velocity_change`) instead of each model's own. Why (session 20): per model, the fitted state lets
+#: a model that misses an effect absorb it (the bundled 2.2 Hz trial's rigid baseline, shot through the simulation,
+#: reaches the shot surface's gap); shared, the state's freedom is the same for every model.
+VELOCITY_FIT_SHARED = False
 #: A loss and its source: (loss, source), identified in that order.
 PAIRS: tuple[tuple[str, str], ...] = (("surface_compliance", "active_push_off"), ("joint_damping", "active_push_off"))
 #: Scale of the fitted change of (toe vz m/s, q1..q4 rad/s) and its Gaussian prior SD (same units).
@@ -301,7 +306,15 @@ def touchdown_for_gap(chain, law, ground, s: MeasuredStance) -> TouchdownState:
     :data:`VELOCITY_FIT_ACCEPT`'s check of the step)."""
     if TOUCHDOWN_VELOCITY_FIT_S is None:
         return s.touchdown
+    if VELOCITY_FIT_SHARED:
+        return _with_velocity_change(s, shared_velocity_change(chain, s))
     jac = reference_velocity_jacobian(chain, s, ground if VELOCITY_JACOBIAN_OWN_GROUND else None)
+    return _with_velocity_change(s, _velocity_step(chain, law, ground, s, jac))
+
+
+def _velocity_step(chain, law, ground, s: MeasuredStance, jac: np.ndarray) -> np.ndarray:
+    """One Gauss-Newton step of the velocity change for ``law`` on ``ground`` (checked with
+    :data:`VELOCITY_FIT_ACCEPT`)."""
     r0, reached0 = velocity_window_run(chain, law, ground, s, np.zeros(5))
     d = -np.linalg.lstsq(jac, r0, rcond=None)[0]
     if VELOCITY_FIT_ACCEPT:
@@ -312,7 +325,26 @@ def touchdown_for_gap(chain, law, ground, s: MeasuredStance) -> TouchdownState:
             d = 0.5 * d
         else:
             d = np.zeros(5)
-    return _with_velocity_change(s, d)
+    return d
+
+
+def shared_velocity_change(chain, s: MeasuredStance) -> np.ndarray:
+    """:data:`VELOCITY_FIT_SHARED`'s change: the step under the stance's reference law
+    (:func:`reference_velocity_law`), the same for every model; kept on the stance per body and window."""
+    key = (chain_key(chain), TOUCHDOWN_VELOCITY_FIT_S, VELOCITY_FIT_ACCEPT)
+    cache = s.__dict__.setdefault("_shared_velocity_changes", {})
+    if key not in cache:
+        law, ground = reference_velocity_law(s)
+        cache[key] = _velocity_step(chain, law, ground, s, reference_velocity_jacobian(chain, s))
+    return cache[key]
+
+
+def reference_velocity_law(s: MeasuredStance):
+    """The stance's reference law and ground: constant stiffness with its k0 from this stance alone and ``M_td``
+    estimated, on the rigid ground."""
+    coefs, _ = fit_joint_law(ModelSpec(), [s])
+    law = FittedLaw(ModelSpec(), coefs, touchdown_moments(ModelSpec(), coefs, s), identification_reference(s))
+    return law, ground_of(ModelSpec(), s)
 
 
 def _with_velocity_change(s: MeasuredStance, d: np.ndarray) -> TouchdownState:
@@ -356,9 +388,8 @@ def reference_velocity_jacobian(chain, s: MeasuredStance, ground=None, step: flo
     key = (chain_key(chain), TOUCHDOWN_VELOCITY_FIT_S, repr(ground))
     cache = s.__dict__.setdefault("_velocity_jacobians", {})
     if key not in cache:
-        coefs, _ = fit_joint_law(ModelSpec(), [s])
-        law = FittedLaw(ModelSpec(), coefs, touchdown_moments(ModelSpec(), coefs, s), identification_reference(s))
-        ground = ground_of(ModelSpec(), s) if ground is None else ground
+        law, rigid = reference_velocity_law(s)
+        ground = rigid if ground is None else ground
         r0 = velocity_window_residual(chain, law, ground, s, np.zeros(5))
         cache[key] = np.column_stack([(velocity_window_residual(chain, law, ground, s, step * e) - r0) / step
                                       for e in np.eye(5)])

@@ -48,6 +48,19 @@ def test_corrected_velocities_make_the_true_law_take_off_on_time_at_1p53_hz(monk
     assert np.sum(np.abs(measured) > 50.0) >= 3
     assert np.sqrt(np.mean(corrected**2)) < 3.0  # 1.3 ms
     assert np.max(np.abs(corrected)) < 5.0
+    # session 20: one state per stance, fitted under its reference law, for every model: the same on time here
+    monkeypatch.setattr(fs, "VELOCITY_FIT_SHARED", True)
+    shared = _take_off_errors_ms(trial, k0)
+    assert np.sqrt(np.mean(shared**2)) < 3.0  # 1.4 ms
+    assert np.max(np.abs(shared)) < 5.0
+    s = trial.stances[2]  # a model with another stiffness starts from the very same state
+    other = FittedLaw(ModelSpec(), 0.7 * k0, touchdown_moments(ModelSpec(), 0.7 * k0, s), fs.identification_reference(s))
+    mine = FittedLaw(ModelSpec(), k0, touchdown_moments(ModelSpec(), k0, s), fs.identification_reference(s))
+    td_other = fs.touchdown_for_gap(trial.chain, other, RIGID_NO_BOUNCE, s)
+    td_mine = fs.touchdown_for_gap(trial.chain, mine, RIGID_NO_BOUNCE, s)
+    assert np.array_equal(td_other.gd, td_mine.gd) and not np.array_equal(td_mine.gd, s.touchdown.gd)
+    monkeypatch.setattr(fs, "VELOCITY_FIT_SHARED", False)
+    assert not np.array_equal(fs.touchdown_for_gap(trial.chain, other, RIGID_NO_BOUNCE, s).gd, td_mine.gd)
 
 
 def test_the_reference_jacobian_is_kept_per_body_and_the_correction_is_small():
