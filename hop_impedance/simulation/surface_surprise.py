@@ -207,13 +207,15 @@ def unexpected_hard_vs_soft(freq_hz: float = 2.2, effects: Effects = Effects(), 
     td = touchdown_state(chain, q, np.array([0.0, -cal.speed_m_s]), 0.0)
     pad = cfg.surface.pad if isinstance(cfg.surface, PaddedGround) else None  # keep_pad: the pad on both surfaces
     expected_ground, unexpected_ground = with_pad(expected_law, pad), with_pad(unexpected_law, pad)
-    kw = {"friction_coefficient": cfg.friction_coefficient, "trunk_balance": cfg.trunk_balance}
-    prepared = _dense(chain, law, expected_ground, td, simulate_stance(chain, law, expected_ground, td, **kw))
+    prepared = _dense(chain, law, expected_ground, td,
+                      simulate_stance(chain, law, expected_ground, td, friction_coefficient=cfg.friction_coefficient,
+                                      trunk_balance=cfg.trunk_balance))
     surprise_law = law
     if preprogrammed:
         surprise_law = with_prepared_stiffening(law, prepared.t_s, prepared.rho_rad - prepared.rho_rad[0])
     surprised = _dense(chain, surprise_law, unexpected_ground, td,
-                       simulate_stance(chain, surprise_law, unexpected_ground, td, **kw))
+                       simulate_stance(chain, surprise_law, unexpected_ground, td,
+                                       friction_coefficient=cfg.friction_coefficient, trunk_balance=cfg.trunk_balance))
     soft, hard = (prepared, surprised) if expected == "soft" else (surprised, prepared)
 
     def flexion(st: StanceSimulation) -> np.ndarray:
