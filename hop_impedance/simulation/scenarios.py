@@ -281,6 +281,14 @@ def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_durati
     return CompositeLaw((eq3, push))
 
 
+def passive_law(freq_hz: float, effects: Effects, hip_trunk_spring_nm_rad: float = 0.0,
+                law_scale: dict | None = None) -> ImpedanceLaw:
+    """The law of the passive stance the push-off and the bell are timed by: ``effects`` without the push-off, no
+    bell (:func:`build_law`'s other arguments)."""
+    return build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0, hip_trunk_spring_nm_rad,
+                     law_scale=law_scale)
+
+
 def nominal_stance_s(chain: Chain, law: ImpedanceLaw, ground: Ground, rho_td, freq_hz: float) -> float:
     """Stance time (s) of one passive stance at a typical touchdown speed, to time the push-off."""
     q = touchdown_posture(chain, np.asarray(rho_td, float))
@@ -330,8 +338,7 @@ def hopping_config(
     """
     chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
     expected = with_pad(surface(calibration_surface or surface_name), pad)
-    passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0,
-                        hip_trunk_spring_nm_rad, law_scale=law_scale)
+    passive = passive_law(freq_hz, effects, hip_trunk_spring_nm_rad, law_scale)
     ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
     bell = None if bell_activation_min is None else BellActivation(bell_activation_min, ts)
     law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts, hip_trunk_spring_nm_rad, bell,

@@ -59,6 +59,7 @@ from hop_impedance.simulation.scenarios import (
     SEED_SUBJECT,
     Effects,
     build_law,
+    passive_law,
     seed_stiffness,
 )
 from hop_impedance.simulation.sensors import SensorConfig, sample_recording
@@ -275,7 +276,7 @@ def _stance_set_law(chain: Chain, freq_hz: float, effects: Effects, sizes: Effec
     speed and stance are those of the law without its push-off (:func:`nominal_touchdown_speed`).
     """
     if sizes is None:
-        passive = build_law(freq_hz, Effects(**{**effects.to_dict(), "push_off": False}), 0.0, 1.0)
+        passive = passive_law(freq_hz, effects)
         speed_nom, ts_nom = nominal_touchdown_speed(chain, passive, ground, rho_td, freq_hz)
         law = build_law(freq_hz, effects, 0.35 * ts_nom, 0.6 * ts_nom)
     else:

@@ -71,7 +71,7 @@ from hop_impedance.simulation.hopping_trial import (
     touchdown_state,
 )
 from hop_impedance.simulation.impedance_laws import with_prepared_stiffening
-from hop_impedance.simulation.scenarios import Effects, build_law, hopping_config, law_scale_at, nominal_stance_s
+from hop_impedance.simulation.scenarios import Effects, hopping_config, law_scale_at, nominal_stance_s, passive_law
 from hop_impedance.simulation.stance import StanceSimulation, resample_stance, simulate_stance
 
 #: Sampling step of the two stances (s) on which the figures are read (their dense solutions, not the solver's steps).
@@ -148,12 +148,10 @@ def anticipated_stiffening(freq_hz: float, options: dict, effects: Effects = Eff
     are :func:`~hop_impedance.simulation.scenarios.hopping_config`'s (without a pad: :func:`seed001_options`); the
     passive stance is the one ``hopping_config`` times the push-off by (no push-off, no bell, its touchdown speed)."""
     chain, cfg = hopping_config(freq_hz, "soft", 1, effects, variability=False, **options)
-    passive_effects = Effects(**{**effects.to_dict(), "push_off": False})
 
     def stance_s(ground, factor: float) -> float:
         scale = with_stiffening(options, freq_hz, factor)["law_scale"]
-        passive = build_law(freq_hz, passive_effects, 0.0, 1.0, options.get("hip_trunk_spring_nm_rad", 0.0),
-                            law_scale=scale)
+        passive = passive_law(freq_hz, effects, options.get("hip_trunk_spring_nm_rad", 0.0), scale)
         return nominal_stance_s(chain, passive, ground, cfg.touchdown_rho_rad, freq_hz)
 
     target = stance_s(reference, 1.0)
