@@ -13,6 +13,7 @@ Usage::
     .venv/bin/python bench/simulator_realism.py --hopper seed-like    # the package's preset (the bundled recordings')
     .venv/bin/python bench/simulator_realism.py --hopper seed-like --write   # its table into the README and docs
     .venv/bin/python bench/simulator_realism.py --hopper seed-like --push-weights 1,-0.2,0.3 --law-scale-file F.json
+    .venv/bin/python bench/simulator_realism.py --hopper seed-like --trunk-gains 300,40 --law-scale-file F.json
 
 Every simulated figure is measured by the analysis (``hop-impedance analyze``:
 ``analyze_recording`` + ``io.analyze_json.analysis_to_json``, stance detection and 2D inverse
@@ -422,16 +423,20 @@ def measure_all(freqs: str | None, measure_one) -> dict:
 
 def run_hopper(args: argparse.Namespace) -> tuple[dict, str]:
     """``--hopper seed-like``: the realism figures of the package's preset on its surface, and the setup line;
-    ``--push-weights`` / ``--law-scale-file`` change the preset as bench/simulator_issue17.py's same flags do."""
+    ``--push-weights`` / ``--law-scale-file`` change the preset as bench/simulator_issue17.py's same flags do,
+    ``--trunk-gains K,B`` as its ``--trunk K,B`` and ``--flight energy_keeping`` as its ``--flight``."""
     options, variant = seed_like_hopper_options(), ""
-    if args.push_weights or args.law_scale_file:
+    flight = None if args.flight == "prescribed" else args.flight
+    if args.push_weights or args.law_scale_file or args.trunk_gains or flight:
         import simulator_issue17 as s17  # a bench next to this one, which imports this one: not at the top
 
         options, _ = s17.variant_options(s17.VariantArgs(hopper="seed-like", surface=SEED_LIKE_HOPPER_SURFACE,
                                                          law_scale="none", push_weights=args.push_weights,
-                                                         law_scale_file=args.law_scale_file))
-        variant = "".join(f" with {name} {value}" for name, value in (("push-off weights", args.push_weights),
-                                                                       ("the law Table 2 x", args.law_scale_file)) if value)
+                                                         law_scale_file=args.law_scale_file, trunk=args.trunk_gains,
+                                                         flight=flight))
+        variant = "".join(f" with {name} {value}" for name, value in (
+            ("push-off weights", args.push_weights), ("trunk balance", args.trunk_gains), ("flight", flight),
+            ("the law Table 2 x", args.law_scale_file)) if value)
     results = measure_all(args.freqs, lambda f: measure_hopper(f, options, SEED_LIKE_HOPPER_SURFACE, fits=args.fits))
     setup = (f"scenarios.seed_like_hopper_options() (the hopper of the bundled Table 1 recordings){variant} on the "
              f"{SEED_LIKE_HOPPER_SURFACE} plate with its shoe pad, "
@@ -479,11 +484,16 @@ def main() -> None:
                         help="with --hopper: the push-off's shares per joint (simulator_issue17.py's flag), not with --write")
     parser.add_argument("--law-scale-file", metavar="PATH",
                         help="with --hopper: the law Table 2 x PATH's factors (simulator_issue17_search.py --save)")
+    parser.add_argument("--trunk-gains", metavar="K,B",
+                        help="with --hopper: the trunk balance's stiffness and damping instead of the preset's 500,60 "
+                             "(simulator_issue17.py's --trunk); not with --write")
     args = parser.parse_args()
     if args.hopper and (args.seed_like or args.freqs and args.write):
         parser.error("--hopper is the preset: not with --seed-like, and --write not with --freqs")
-    if (args.push_weights or args.law_scale_file) and (not args.hopper or args.write):
-        parser.error("--push-weights and --law-scale-file change --hopper's preset, and are not written")
+    hopper_variant = args.push_weights or args.law_scale_file or args.trunk_gains
+    if (hopper_variant or args.hopper and args.flight != "prescribed") and (not args.hopper or args.write):
+        parser.error("--push-weights, --law-scale-file, --trunk-gains and --flight change --hopper's preset, and are not "
+                     "written")
     if args.hopper:
         t0 = time.perf_counter()
         results, setup = run_hopper(args)
