@@ -18,8 +18,12 @@ round's held-out screen (p, pooled shrink) and the stiffness gate's p.
 ``forward_selection.VELOCITY_FIT_ACCEPT`` / ``VELOCITY_JACOBIAN_OWN_GROUND`` on the runs with the fit;
 ``--shared`` ``VELOCITY_FIT_SHARED`` (one fitted state per stance for every model).
 
+``--paired candidate|current`` (session 21): ``forward_selection.PAIRED_VELOCITY_STATE`` (one state per pairwise
+comparison, fitted under the candidate's or the current model's law; acts in ``discover``'s comparisons only, so the
+per-stance table is the per-model fit's). ``--fit-only``: skip the runs without the fit (the default's, known).
+
 Usage: .venv/bin/python bench/discovery_stance_terms.py REC.mcap [--touchdown-velocity-fit 0.06] [--stances 5,6,8]
-       [--discover] [--accept-step] [--own-ground-jacobian] [--shared]
+       [--discover] [--accept-step] [--own-ground-jacobian] [--shared] [--paired candidate|current] [--fit-only]
 """
 
 from __future__ import annotations
@@ -44,7 +48,11 @@ def main() -> None:
     ap.add_argument("--own-ground-jacobian", action="store_true",
                     help="forward_selection.VELOCITY_JACOBIAN_OWN_GROUND")
     ap.add_argument("--shared", action="store_true", help="forward_selection.VELOCITY_FIT_SHARED")
+    ap.add_argument("--paired", choices=("candidate", "current"), default=None,
+                    help="forward_selection.PAIRED_VELOCITY_STATE")
+    ap.add_argument("--fit-only", action="store_true", help="only the runs with the fit")
     args = ap.parse_args()
+    fs.PAIRED_VELOCITY_STATE = args.paired
     fs.VELOCITY_FIT_SHARED = args.shared
     fs.VELOCITY_FIT_ACCEPT = args.accept_step  # module options: set before any evaluator forks its workers
     fs.VELOCITY_JACOBIAN_OWN_GROUND = args.own_ground_jacobian
@@ -55,7 +63,8 @@ def main() -> None:
     picked = [int(k) for k in args.stances.split(",") if k] or range(len(trial.stances))
     print("stance  fit     G       GRF  ang_a ang_k ang_h mom_a mom_k mom_h  duration ms  work sim / measured J  end")
     means = {}
-    for window in (None, args.touchdown_velocity_fit):
+    windows = (args.touchdown_velocity_fit,) if args.fit_only else (None, args.touchdown_velocity_fit)
+    for window in windows:
         fs.TOUCHDOWN_VELOCITY_FIT_S = window  # before the evaluator forks its workers, which read it
         with fs.HeldOutEvaluator(rec, trial) as ev:  # discovery's own leave-one-out runs of the baseline
             r = ev.run(ModelSpec(), [None])[0]
@@ -68,7 +77,7 @@ def main() -> None:
     if args.discover:
         from hop_impedance.discovery.workflow import discover
 
-        for window in (None, args.touchdown_velocity_fit):
+        for window in windows:
             fs.TOUCHDOWN_VELOCITY_FIT_S = window
             doc = discover(rec)
             print(f"discover, fit {window}: named {doc['effects_found'] or 'nothing'}, baseline gap "
@@ -80,7 +89,10 @@ def main() -> None:
                 print(f"  round {g['round']} gate: current shot, mean per-stance gap "
                       f"{np.mean(g['current']['per_stance_gap_shot']):.3f}; "
                       + ", ".join(f"{e} p {v['p_value']:.2g} passes {v['passes']}, shot "
-                                  f"{np.mean(v['per_stance_gap_shot']):.3f}" for e, v in g["candidates"].items()))
+                                  f"{np.mean(v['per_stance_gap_shot']):.3f}"
+                                  + (f" (current from the same states {np.mean(v['paired_current_per_stance_gap']):.3f})"
+                                     if "paired_current_per_stance_gap" in v else "")
+                                  for e, v in g["candidates"].items()))
 
 
 if __name__ == "__main__":

@@ -48,7 +48,7 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -147,6 +147,15 @@ VELOCITY_JACOBIAN_OWN_GROUND = False
 #: a model that misses an effect absorb it (the bundled 2.2 Hz trial's rigid baseline, shot through the simulation,
 #: reaches the shot surface's gap); shared, the state's freedom is the same for every model.
 VELOCITY_FIT_SHARED = False
+#: Session 21 (a sub-option of :data:`TOUCHDOWN_VELOCITY_FIT_S`, off; docs/discovery.md "Session 21"): one touchdown
+#: state per pairwise comparison. Where a candidate is judged against the current model (the held-out screen,
+#: :func:`score`, and the stiffness gate, ``workflow._gated``), each held-out stance's velocities are fitted once, under
+#: the law the candidate (``"candidate"``) or the current model (``"current"``) held that stance out with, and both
+#: models are simulated from that one state (:func:`paired`). Why (session 20): fitted per model, the state lets a
+#: model that misses an effect absorb it (the bundled 2.2 Hz trial's rigid baseline); shared under the stance's
+#: reference law, it is only as right as that law (1201). Here neither side of a comparison gets a state of its own,
+#: and the state is one of the two laws compared. None: each model from its own state (:func:`touchdown_for_gap`).
+PAIRED_VELOCITY_STATE: str | None = None
 #: A loss and its source: (loss, source), identified in that order.
 PAIRS: tuple[tuple[str, str], ...] = (("surface_compliance", "active_push_off"), ("joint_damping", "active_push_off"))
 #: Scale of the fitted change of (toe vz m/s, q1..q4 rad/s) and its Gaussian prior SD (same units).
@@ -182,6 +191,8 @@ class HeldOutRuns:
         CPU-side wall time spent on this model's runs (s).
     surface_factors : list of dict or None
         With :data:`SURFACE_FOLDS`: per fold the held-out stances and the shot surface's factors on ``k, n, d``.
+    models : list or None
+        Per stance the model it was simulated with (:func:`paired` re-simulates them).
     """
 
     effect: str | None
@@ -193,6 +204,8 @@ class HeldOutRuns:
     end_reasons: list
     seconds: float = 0.0
     surface_factors: list | None = None
+    #: Per stance the ``(spec, coefficients)`` it was held out with (:func:`paired`; None where the stance was lost).
+    models: list | None = None
 
     def figures(self, scales: np.ndarray) -> dict:
         """Pooled held-out gap: ``total`` (mean G_i, first key) then per-signal RMS (and RMS / scale) and duration."""
@@ -258,22 +271,33 @@ def _stance_by_index(trial: MeasuredTrial, index: int) -> MeasuredStance | None:
 
 
 def simulate_held_out(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: MeasuredStance,
-                      scales: np.ndarray, samples: bool = False) -> dict:
-    """Forward-simulate stance ``s`` with the identified model; gap figures of that stance.
+                      scales: np.ndarray, samples: bool = False, touchdown: TouchdownState | None = None) -> dict:
+    """Forward-simulate stance ``s`` with the identified model; gap figures of that stance, and ``model``, the
+    ``(spec, coefs)`` simulated.
 
     ``samples``: also its scaled residuals (:func:`_gap_of`), for a least-squares search over parameters.
+    ``touchdown``: the state to start from (:func:`paired`; default :func:`touchdown_for_gap`'s).
     """
-    coefs = per_stance_push_off(spec, coefs, s)
-    m0 = touchdown_moments(spec, coefs, s)
-    law = FittedLaw(spec, np.asarray(coefs, float), m0, identification_reference(s))
+    law = held_out_law(spec, coefs, s)
     try:
-        sim = simulate_for_gap(trial.chain, law, ground_of(spec, s), s)
+        sim = simulate_for_gap(trial.chain, law, ground_of(spec, s), s, touchdown)
     except RuntimeError as exc:
-        return {"gap": np.inf, "rms": np.full(7, np.nan), "duration_error_s": np.nan, "net_work_j": np.nan,
-                "end_reason": f"failed: {exc}", "samples": None, "terms": None}
+        return {**lost_stance(f"failed: {exc}"), "model": (spec, coefs)}
     # the detector's level is read only by the two-sided term: not worked out for every simulated stance otherwise
     level = take_off_level_n(trial) if TWO_SIDED_DURATION else np.nan
-    return _gap_of(sim, s, spec.offset_n, scales, level, samples)
+    return {**_gap_of(sim, s, spec.offset_n, scales, level, samples), "model": (spec, coefs)}
+
+
+def held_out_law(spec: ModelSpec, coefs: np.ndarray, s: MeasuredStance) -> FittedLaw:
+    """The identified model's law for stance ``s``: its push-off amplitude and ``M_td`` estimated on ``s``."""
+    coefs = per_stance_push_off(spec, coefs, s)
+    return FittedLaw(spec, np.asarray(coefs, float), touchdown_moments(spec, coefs, s), identification_reference(s))
+
+
+def lost_stance(reason: str) -> dict:
+    """The figures of a stance that was not simulated (failed, or lost when re-measured): an infinite gap."""
+    return {"gap": np.inf, "rms": np.full(7, np.nan), "duration_error_s": np.nan, "net_work_j": np.nan,
+            "end_reason": reason, "samples": None, "terms": None}
 
 
 def identification_reference(s: MeasuredStance) -> TouchdownReference:
@@ -283,8 +307,9 @@ def identification_reference(s: MeasuredStance) -> TouchdownReference:
     return TouchdownReference(np.asarray(s.rho_rad[0], float), np.asarray(s.omega_rad_s[0], float))
 
 
-def simulate_for_gap(chain, law, ground, s: MeasuredStance):
-    """Stance ``s`` simulated from its measured touchdown state, sampled at its measured times and on past them.
+def simulate_for_gap(chain, law, ground, s: MeasuredStance, touchdown: TouchdownState | None = None):
+    """Stance ``s`` simulated from its touchdown state (``touchdown``, else :func:`touchdown_for_gap`'s), sampled at
+    its measured times and on past them.
 
     With :data:`TWO_SIDED_DURATION` the samples go on at the plate's interval up to the longest stance integrated (1.5
     times the measured one plus 50 ms; the simulation stops at its own take-off), so :func:`simulated_take_off_s` can
@@ -294,8 +319,9 @@ def simulate_for_gap(chain, law, ground, s: MeasuredStance):
     t_max = 1.5 * float(s.t_s[-1]) + 0.05
     dt = float(np.median(np.diff(s.t_s)))
     tail = s.t_s[-1] + dt * np.arange(1, int(np.ceil((t_max - s.t_s[-1]) / dt)) + 1) if TWO_SIDED_DURATION else []
-    return simulate_stance(chain, law, ground, touchdown_for_gap(chain, law, ground, s), t_max_s=t_max, rtol=RTOL,
-                           atol=ATOL, sample_times_s=np.r_[s.t_s, tail])
+    start = touchdown_for_gap(chain, law, ground, s) if touchdown is None else touchdown
+    return simulate_stance(chain, law, ground, start, t_max_s=t_max, rtol=RTOL, atol=ATOL,
+                           sample_times_s=np.r_[s.t_s, tail])
 
 
 def touchdown_for_gap(chain, law, ground, s: MeasuredStance) -> TouchdownState:
@@ -306,10 +332,16 @@ def touchdown_for_gap(chain, law, ground, s: MeasuredStance) -> TouchdownState:
     :data:`VELOCITY_FIT_ACCEPT`'s check of the step)."""
     if TOUCHDOWN_VELOCITY_FIT_S is None:
         return s.touchdown
+    return _with_velocity_change(s, velocity_change(chain, law, ground, s))
+
+
+def velocity_change(chain, law, ground, s: MeasuredStance) -> np.ndarray:
+    """The fitted change of stance ``s``'s touchdown velocities for ``law`` on ``ground`` (in :data:`VELOCITY_SCALE`
+    units): :func:`shared_velocity_change` with :data:`VELOCITY_FIT_SHARED`, else ``law``'s own step."""
     if VELOCITY_FIT_SHARED:
-        return _with_velocity_change(s, shared_velocity_change(chain, s))
+        return shared_velocity_change(chain, s)
     jac = reference_velocity_jacobian(chain, s, ground if VELOCITY_JACOBIAN_OWN_GROUND else None)
-    return _with_velocity_change(s, _velocity_step(chain, law, ground, s, jac))
+    return _velocity_step(chain, law, ground, s, jac)
 
 
 def _velocity_step(chain, law, ground, s: MeasuredStance, jac: np.ndarray) -> np.ndarray:
@@ -484,8 +516,7 @@ def _run_one(task: tuple) -> dict:
     fitted, coefs = identify(fitted, measured, train)
     s = _stance_by_index(measured, index)
     if s is None:  # the stance is not usable once re-measured: compare nothing, count as failed
-        return {"gap": np.inf, "rms": np.full(7, np.nan), "duration_error_s": np.nan, "net_work_j": np.nan,
-                "end_reason": "stance lost when re-measured"}
+        return lost_stance("stance lost when re-measured")
     return simulate_held_out(fitted, coefs, measured, s, _CONTEXT["scales"])
 
 
@@ -506,9 +537,24 @@ def _figures_one(task: tuple) -> dict:
     trial = trial_for(spec)
     s = _stance_by_index(trial, index)
     if s is None:
-        return {"gap": np.inf, "rms": np.full(7, np.nan), "duration_error_s": np.nan, "net_work_j": np.nan,
-                "end_reason": "stance lost when re-measured"}
+        return lost_stance("stance lost when re-measured")
     return simulate_held_out(spec, coefs, trial, s, _CONTEXT["scales"])
+
+
+def _paired_one(task: tuple) -> list[dict]:
+    """Stance ``index`` simulated with both models of one comparison (``(current, candidate)``, each ``(spec,
+    coefs)``) from one state: the velocity change fitted under the model :data:`PAIRED_VELOCITY_STATE` names, applied
+    to each model's own measurement of the stance (a latency or body split re-measures it)."""
+    models, index = task
+    found = [None if m is None else _stance_by_index(trial_for(m[0]), index) for m in models]
+    stances = [s for s in found if s is not None]
+    if len(stances) < 2:
+        return [lost_stance("stance lost when re-measured")] * 2
+    k = 1 if PAIRED_VELOCITY_STATE == "candidate" else 0
+    (spec, coefs), s = models[k], stances[k]
+    d = velocity_change(trial_for(spec).chain, held_out_law(spec, coefs, s), ground_of(spec, s), s)
+    return [simulate_held_out(sp, c, trial_for(sp), st, _CONTEXT["scales"], True, _with_velocity_change(st, d))
+            for (sp, c), st in zip(models, stances)]
 
 
 class HeldOutEvaluator:
@@ -566,6 +612,12 @@ class HeldOutEvaluator:
         tasks = [(spec, coefs, i) for i in indices]
         return list(self._pool.map(_figures_one, tasks)) if self._pool else [_figures_one(t) for t in tasks]
 
+    def paired_runs(self, current: list, cand: list) -> list[list[dict]]:
+        """Per stance (the evaluator's order) the runs of the two models of a comparison from one state
+        (:func:`_paired_one`; ``current`` / ``cand``: per stance the ``(spec, coefs)`` each held it out with)."""
+        tasks = [((a, b), s.index) for a, b, s in zip(current, cand, self.trial.stances)]
+        return list(self._pool.map(_paired_one, tasks)) if self._pool else [_paired_one(t) for t in tasks]
+
     def run(self, spec: ModelSpec, effects: list) -> list[HeldOutRuns]:
         """Held-out runs of ``spec`` with each of ``effects`` added (None = ``spec`` itself); leave-one-out, or with
         :data:`SURFACE_FOLDS` and the surface in ``spec`` on folds with each model's surface shot."""
@@ -589,7 +641,7 @@ class HeldOutEvaluator:
                 effect=e, spec=fitted, gaps=np.array([r["gap"] for r in rs]), rms=np.array([r["rms"] for r in rs]),
                 duration_error_s=np.array([r["duration_error_s"] for r in rs]),
                 net_work_j=np.array([r["net_work_j"] for r in rs]), end_reasons=[r["end_reason"] for r in rs],
-                seconds=wall / len(effects)))
+                seconds=wall / len(effects), models=[r.get("model") for r in rs]))
         return out
 
 
@@ -708,18 +760,52 @@ def significant(p_value: float, shrink: float, n_candidates: int) -> bool:
     return p_value < ALPHA / max(n_candidates, 1) and shrink >= MIN_SHRINK
 
 
-def score(trial: MeasuredTrial, current: HeldOutRuns, cands: list[HeldOutRuns]) -> list[ForwardScore]:
-    """Compare every candidate's held-out forward runs with the current model's (module docstring)."""
+def score(trial: MeasuredTrial, current: HeldOutRuns, cands: list[HeldOutRuns],
+          ev: HeldOutEvaluator | None = None) -> list[ForwardScore]:
+    """Compare every candidate's held-out forward runs with the current model's (module docstring); with ``ev`` and
+    :data:`PAIRED_VELOCITY_STATE` both sides of each comparison from one state per stance (:func:`paired`; the
+    score keeps the candidate's own runs)."""
     out = []
     for c in cands:
-        d, shrink, p = compare_gaps(current.gaps, c.gaps)
+        cur, cand = paired(ev, current, c)
+        d, shrink, p = compare_gaps(cur.gaps, cand.gaps)
         assert c.effect is not None  # a candidate adds an effect (remaining(spec)); None is the current model
-        phys = physics_evidence(trial, current, c)
+        phys = physics_evidence(trial, cur, cand)
         ok, why = admissible(c.effect, phys)
         phys["admissible"], phys["inadmissible_because"] = ok, why or None
         out.append(ForwardScore(c.effect, c, d, float(np.mean(np.clip(np.nan_to_num(d, nan=0.0), -10, 10))),
                                 shrink, p, ok, phys))
     return out
+
+
+def paired(ev: HeldOutEvaluator | None, current, cand):
+    """The two sides of one comparison, ``(current, candidate)``: :class:`HeldOutRuns` (the screen) or the stiffness
+    gate's ``HeldOutShot`` s. As they are, or with :data:`PAIRED_VELOCITY_STATE` (and the velocity fit, and an
+    evaluator) copies whose per-stance figures are re-simulated: each held-out stance with the two models it was held
+    out with, both from the one state fitted under the model the option names (:meth:`HeldOutEvaluator.paired_runs`)."""
+    if PAIRED_VELOCITY_STATE is None or TOUCHDOWN_VELOCITY_FIT_S is None or ev is None:
+        return current, cand
+    assert PAIRED_VELOCITY_STATE in ("candidate", "current"), PAIRED_VELOCITY_STATE
+    assert current.models is not None and cand.models is not None, "paired runs need the models each side held out"
+    runs = ev.paired_runs(current.models, cand.models)
+    out = []
+    for k, side in enumerate((current, cand)):
+        rs = [r[k] for r in runs]
+        gaps = np.array([r["gap"] for r in rs])
+        if isinstance(side, HeldOutRuns):
+            out.append(replace(side, gaps=gaps, rms=np.array([r["rms"] for r in rs]),
+                               duration_error_s=np.array([r["duration_error_s"] for r in rs]),
+                               net_work_j=np.array([r["net_work_j"] for r in rs]),
+                               end_reasons=[r["end_reason"] for r in rs]))
+        else:
+            out.append(replace(side, gaps=gaps, signal_errors=signal_errors(rs)))
+    return out[0], out[1]
+
+
+def signal_errors(runs: list[dict]) -> np.ndarray:
+    """(n, len(GAP_SIGNALS)): per run the mean squared scaled residual of each sampled signal (NaN: failed)."""
+    return np.array([np.full(len(GAP_SIGNALS), np.nan) if r["samples"] is None else np.mean(r["samples"] ** 2, axis=0)
+                     for r in runs])
 
 
 #: Effects whose physics evidence is the measured net joint work (:func:`admissible`).
