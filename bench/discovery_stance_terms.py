@@ -90,9 +90,21 @@ def main() -> None:
                       f"{np.mean(g['current']['per_stance_gap_shot']):.3f}; "
                       + ", ".join(f"{e} p {v['p_value']:.2g} passes {v['passes']}, shot "
                                   f"{np.mean(v['per_stance_gap_shot']):.3f}"
+                                  + _per_signal(v)
                                   + (f" (current from the same states {np.mean(v['paired_current_per_stance_gap']):.3f})"
                                      if "paired_current_per_stance_gap" in v else "")
                                   for e, v in g["candidates"].items()))
+
+
+def _per_signal(gate: dict) -> str:
+    """The stiffness gate's per-signal test in one phrase: passes, the best signal's p and the worst signal's."""
+    per = gate.get("per_signal")
+    if per is None:
+        return ""
+    best, b = min(per["signals"].items(), key=lambda kv: kv[1]["p_better"])
+    worst, w = min(per["signals"].items(), key=lambda kv: kv[1]["p_worse"])
+    return (f", per signal passes {per['passes']} (best {best} p {b['p_better']:.2g} at level {per['level']:.2g}; "
+            f"worse on {worst} p {w['p_worse']:.2g})")
 
 
 if __name__ == "__main__":
