@@ -426,6 +426,9 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the flight model (hopping_trial.py): energy_keeping returns the segments' motion and the "
                              "springs' energy at take-off at the next touchdown instead of discarding them (issue 17: "
                              "the push-off only replaces real losses); default the options' own (prescribed)")
+    parser.add_argument("--landing", choices=("reversed", "prescribed"), default=None,
+                        help="with --flight energy_keeping: land along the take-off rates reversed (default) or along "
+                             "the prescribed flight's own landing motion (HoppingConfig.landing; same energy)")
 
 
 def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
@@ -472,6 +475,9 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     if args.flight:
         options["flight"] = args.flight
         said.append(f"flight {args.flight}")
+    if args.landing:
+        options["landing"] = args.landing
+        said.append(f"landing {args.landing}")
     return options, f"scenarios.{'seed_like_hopper_options' if preset else 'seed_like_options'}(), " + ", ".join(said)
 
 
@@ -495,7 +501,7 @@ def main() -> None:
     freqs = tuple(f for f in FREQS if f in floats(args.freqs))
     variant = any((args.bell is not None, args.law_scale != "none",
                    args.pad, args.posture, args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS,
-                   args.push_weights, args.law_scale_file, args.flight,
+                   args.push_weights, args.law_scale_file, args.flight, args.landing,
                    args.no_seed001, args.seed != 1))
     # the table kept in docs/simulator.md: the bundled recordings' preset (--hopper seed-like --surface rigid) or the
     # library's default options; nothing else, so that the docs never show a variant as the simulator

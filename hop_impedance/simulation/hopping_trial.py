@@ -85,6 +85,8 @@ from hop_impedance.simulation.stance import (
 MIN_HOP_STANCE_S = 0.05
 #: Flight models of :class:`HoppingConfig` (module docstring).
 FLIGHT_MODELS = ("prescribed", "energy_keeping")
+#: Landing directions of the energy-keeping flight (:attr:`HoppingConfig.landing`).
+LANDINGS = ("reversed", "prescribed")
 
 
 def joint_triple(values: Iterable[float]) -> tuple[float, float, float]:
@@ -185,6 +187,13 @@ class HoppingConfig:
         Energy-keeping flight only: choose each landing's rates and the foot placement's reference from the
         hop's own touchdown state (:class:`LandingFeedback`, :func:`landing_for_hop`) instead of the fixed
         ``landing_rates_rad_s`` and ``com_ahead_m``. None (default): fixed.
+    landing : {"reversed", "prescribed"}
+        Energy-keeping flight without ``landing_rates_rad_s`` only: the direction of the landing segment rates.
+        ``"reversed"`` (default): the take-off rates reversed. ``"prescribed"``: the direction the prescribed
+        flight's segments move in as they settle into the touchdown posture (:func:`prescribed_landing_direction`:
+        its quintic arrives at rest, so the direction is that of its last motion, the third derivative at
+        touchdown), i.e. the preset's own landing motion, chosen in flight as a practised landing; the energy
+        the flight carries is unchanged, only its direction. The calibration's rounds use it too.
     """
 
     freq_hz: float
@@ -208,10 +217,13 @@ class HoppingConfig:
     landing_rates_rad_s: tuple[float, ...] | None = None
     first_touchdown: tuple[float, ...] | None = None
     landing_feedback: LandingFeedback | None = None
+    landing: str = "reversed"
 
     def __post_init__(self) -> None:
         if self.flight not in FLIGHT_MODELS:
             raise ValueError(f"flight must be one of {FLIGHT_MODELS}, got {self.flight!r}")
+        if self.landing not in LANDINGS:
+            raise ValueError(f"landing must be one of {LANDINGS}, got {self.landing!r}")
         if not self.freq_hz > 0:
             raise ValueError(f"freq_hz must be positive, got {self.freq_hz}")
         if self.n_hops < 1:
@@ -476,6 +488,39 @@ def flight_segment_rates(chain: Chain, law: ImpedanceLaw, stance: StanceSimulati
     return rates, carried, not_placed
 
 
+def prescribed_landing_direction(chain: Chain, stance: StanceSimulation, q_next: np.ndarray,
+                                 com_vx_m_s: float, t_flight_s: float) -> np.ndarray:
+    """The direction of the prescribed flight's landing motion after ``stance`` (shape (4,), unit norm).
+
+    The prescribed flight's segment angles are a quintic from the take-off angles, rates and accelerations
+    to the touchdown posture ``q_next`` with the toe-correction rates only (:func:`touchdown_state` without
+    rates, ``com_vx_m_s``) and zero acceleration; those rates lie along d(COM x - toe x)/dq, the one
+    direction the energy-keeping flight cannot give energy to (:func:`touchdown_segment_rates` removes
+    it). Just before touchdown the quintic's rates are (toe correction) + h^2/2 d3q/dt3(touchdown), h the
+    time left, so the direction the segments move in as they land is that of its third derivative there.
+    """
+    g_to, gd_to = stance.g[-1], stance.gd[-1]
+    end_rates = touchdown_state(chain, np.asarray(q_next, float), np.array([com_vx_m_s, -1.0]), 0.0).gd[2:]
+    angles = BPoly.from_derivatives(
+        [0.0, t_flight_s],
+        np.array([[g_to[2:], gd_to[2:], stance.gdd[-1, 2:]], [np.asarray(q_next, float), end_rates, np.zeros(4)]]),
+    )
+    jerk = np.asarray(angles.derivative(3)(t_flight_s), float)
+    norm = float(np.linalg.norm(jerk))
+    return jerk / norm if norm > 0 else jerk
+
+
+def landing_direction(chain: Chain, config: HoppingConfig, stance: StanceSimulation, q_next: np.ndarray,
+                      com_vx_m_s: float, t_flight_s: float) -> np.ndarray | None:
+    """The energy-keeping flight's landing direction (``landing_rates_rad_s`` of :func:`flight_segment_rates`):
+    ``config.landing_rates_rad_s`` if given, else :attr:`HoppingConfig.landing`'s (None: reversed take-off rates)."""
+    if config.landing_rates_rad_s is not None:
+        return np.asarray(config.landing_rates_rad_s, float)
+    if config.landing == "prescribed":
+        return prescribed_landing_direction(chain, stance, q_next, com_vx_m_s, t_flight_s)
+    return None
+
+
 #: Rounds of the calibration's fixed point on the touchdown segment rates (each one least-squares solve).
 CALIBRATION_FLIGHT_ROUNDS = 3
 
@@ -641,12 +686,14 @@ def _calibrate_touchdown_rates(hop: _CalibrationHop, has_push: bool,
             break
         try:
             law, st = hop.stance(speed, scale, q_td, rates)
-            _next_touchdown_speed(chain, st, q_td)
+            t_f, _ = _next_touchdown_speed(chain, st, q_td)
         except ValueError:
             break  # this round's rates lead to no hop: keep the previous round's solution
         accepted = (speed, scale, rates)
         if round_ < rounds - 1:
-            rates = flight_segment_rates(chain, law, st, q_td, 0.0)[0]
+            direction = None if hop.config.landing == "reversed" else landing_direction(
+                chain, hop.config, st, q_td, 0.0, t_f)
+            rates = flight_segment_rates(chain, law, st, q_td, 0.0, direction)[0]
     if accepted is not None:
         speed, scale, rates = accepted
     return speed, scale, rates
@@ -846,8 +893,8 @@ def _flight_to_next_touchdown(chain: Chain, config: HoppingConfig, law: Impedanc
     v_next = v_to - np.array([0.0, g_acc * t_f])
     rates, not_placed = None, 0.0
     if config.flight == "energy_keeping":
-        rates, _, not_placed = flight_segment_rates(chain, law, st, q_next, float(v_next[0]),
-                                                    config.landing_rates_rad_s)
+        rates, _, not_placed = flight_segment_rates(
+            chain, law, st, q_next, float(v_next[0]), landing_direction(chain, config, st, q_next, float(v_next[0]), t_f))
     td_next = touchdown_state(chain, q_next, v_next, 0.0, rates)
     angles = BPoly.from_derivatives(
         [0.0, t_f],

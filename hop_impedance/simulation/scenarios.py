@@ -311,7 +311,7 @@ def hopping_config(
     calibration_surface: str | None = None,
     variability: bool = True,
     trunk_balance: TrunkBalance | None = None,
-    flight: str = "prescribed",
+    flight: str = "prescribed", landing: str = "reversed",
     contact_ahead_m: float = 0.0,
     push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     hip_trunk_spring_nm_rad: float = 0.0,
@@ -324,7 +324,8 @@ def hopping_config(
     ``push_timing`` of that stance (default :data:`PUSH_OFF_TIMING`: 35 % and 60 %). ``calibration_surface``
     (default: the trial's surface) is the surface the law is tuned for; with ``unexpected_surface`` the listed hops
     land on that surface instead. ``trunk_balance`` (e.g. :data:`TRUNK_BALANCE`) and ``flight`` are passed to
-    :class:`HoppingConfig` (defaults: none, prescribed flight). ``contact_ahead_m``
+    :class:`HoppingConfig` (defaults: none, prescribed flight), and so is ``landing`` (:attr:`HoppingConfig.landing`,
+    default "reversed"). ``contact_ahead_m``
     moves the ground contact that far in front of the toe marker (:func:`contact_ahead_of_toe_marker`;
     e.g. :func:`toe_tip_ahead_m`, the seed's hinge at the tip of the toe; default 0, the marker).
     ``hip_trunk_spring_nm_rad`` (e.g. :data:`HIP_TRUNK_SPRING_NM_RAD`) holds the trunk by a hip spring
@@ -351,7 +352,7 @@ def hopping_config(
         posture_sd_rad=0.01 if variability else 0.0, speed_sd=0.02 if variability else 0.0,
         push_sd=0.03 if variability else 0.0,
         trunk_balance=trunk_balance,
-        flight=flight,
+        flight=flight, landing=landing,
     )
     if surface_name != (calibration_surface or surface_name):
         config = HoppingConfig(**{**config.__dict__, "unexpected_surface": with_pad(surface(surface_name), pad),

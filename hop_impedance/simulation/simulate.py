@@ -28,7 +28,8 @@ def simulate_recording(
     sensors: SensorConfig = SensorConfig(), *, subject: Subject = SEED_SUBJECT, touchdown_rho_rad=DEFAULT_TOUCHDOWN_RHO,
     tuned_for: str | None = None, unexpected_surface: str | None = None, unexpected_hops: tuple[int, ...] = (),
     variability: bool = True, generator: dict | None = None, trunk_balance: TrunkBalance | None = None,
-    flight: str = "prescribed", contact_ahead_m: float = 0.0, push_timing: tuple[float, float] = PUSH_OFF_TIMING,
+    flight: str = "prescribed", landing: str = "reversed", contact_ahead_m: float = 0.0,
+    push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     bell_activation_min: float | None = None, law_scale: dict | None = None, pad: GroundLaw | None = None,
     push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS,
 ) -> tuple[Recording, dict]:
@@ -60,10 +61,10 @@ def simulate_recording(
         Seeded hop-to-hop variability on (posture, speed target, push-off).
     generator : dict, optional
         Stored as is in the truth file (e.g. the command line).
-    trunk_balance, flight, contact_ahead_m, push_timing, bell_activation_min :
-        Trunk-balance moment at the hip, flight model, ground contact ahead of the toe marker (m) and
+    trunk_balance, flight, landing, contact_ahead_m, push_timing, bell_activation_min :
+        Trunk-balance moment at the hip, flight model and its landing, ground contact ahead of the toe marker (m) and
         push-off onset/duration as fractions of the passive stance (:func:`hopping_config`; defaults:
-        none, prescribed, 0 = at the marker, :data:`PUSH_OFF_TIMING`); ``bell_activation_min``, ``law_scale``, ``pad``,
+        none, prescribed, reversed, 0 = at the marker, :data:`PUSH_OFF_TIMING`); ``bell_activation_min``, ``law_scale``, ``pad``,
         ``push_weights`` too; :func:`seed_like_options` bundles issue 17's candidate.
 
     Returns
@@ -73,7 +74,7 @@ def simulate_recording(
     chain, config = hopping_config(
         freq_hz, surface_name, n_hops, effects, subject=subject, touchdown_rho_rad=touchdown_rho_rad,
         unexpected_surface=unexpected_surface, unexpected_hops=unexpected_hops, calibration_surface=tuned_for,
-        variability=variability, trunk_balance=trunk_balance, flight=flight, contact_ahead_m=contact_ahead_m,
+        variability=variability, trunk_balance=trunk_balance, flight=flight, landing=landing, contact_ahead_m=contact_ahead_m,
         push_timing=push_timing, bell_activation_min=bell_activation_min, law_scale=law_scale, pad=pad,
         push_weights=push_weights)
     trial = simulate_hopping(chain, config, seed=seed)

@@ -113,6 +113,15 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
     }
 
 
+def _flight_model(cfg) -> str:
+    """The truth file's description of ``cfg``'s flight (HoppingConfig.flight, .landing)."""
+    if cfg.flight == "prescribed":
+        return "COM ballistic, segment angles prescribed (quintic) to rest at touchdown; force plate zero"
+    return ("COM ballistic, segment angles quintic to touchdown rates that keep the take-off's segment kinetic energy "
+            "plus the springs' returned energy; force plate zero"
+            + ("; landing along the prescribed flight's landing motion" if cfg.landing == "prescribed" else ""))
+
+
 def trial_truth(
     trial: HoppingTrial,
     sensors: SensorConfig,
@@ -148,10 +157,7 @@ def trial_truth(
             "speed_sd": cfg.speed_sd, "push_sd": cfg.push_sd, "placement_gain_s": cfg.placement_gain_s,
             "lead_in_s": cfg.lead_in_s, "rtol": cfg.rtol, "atol": cfg.atol,
             "friction_coefficient": cfg.friction_coefficient,
-            "flight_model": ("COM ballistic, segment angles prescribed (quintic) to rest at touchdown; force plate zero"
-                             if cfg.flight == "prescribed" else
-                             "COM ballistic, segment angles quintic to touchdown rates that keep the take-off's "
-                             "segment kinetic energy plus the springs' returned energy; force plate zero"),
+            "flight_model": _flight_model(cfg),
             "trunk_balance": None if cfg.trunk_balance is None else cfg.trunk_balance.to_dict(),
             "contact_ahead_of_toe_marker_m": float(np.hypot(trial.chain.toe_marker_along_m,
                                                             trial.chain.toe_marker_perp_m)),

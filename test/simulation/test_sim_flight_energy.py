@@ -143,3 +143,41 @@ def test_with_energy_keeping_flight_the_push_off_only_replaces_stance_losses():
     gain = nxt["e_touchdown_j"] - b["e_touchdown_j"]
     assert b["push_off_j"] == pytest.approx(losses + gain, abs=0.1)
     assert losses > 5.0 and abs(gain) < 0.5 * losses  # measured: losses ~10 J, a near-periodic hop
+
+
+def test_landing_along_the_prescribed_flights_motion_keeps_the_energy_and_its_direction():
+    """``landing="prescribed"``: the energy-keeping flight lands along the prescribed flight's landing motion
+    (hopping_trial.prescribed_landing_direction) instead of the reversed take-off rates; the energy at touchdown
+    still equals the previous take-off's (1e-6 relative), and the landing rates are that direction (less its
+    toe-moving part) scaled to carry it."""
+    from hop_impedance.simulation.dynamics import body_com, com_velocity
+    from hop_impedance.simulation.hopping_trial import flight_time_s, prescribed_landing_direction
+    from hop_impedance.simulation.scenarios import TRUNK_BALANCE
+
+    # The default law (damping, push-off): its lossless counterpart bounces off at the second touchdown with this
+    # landing (measured, session 21); the flight's energy balance does not depend on the stance's losses.
+    chain, cfg = hopping_config(2.2, "hard", 3, variability=False, trunk_balance=TRUNK_BALANCE,
+                                flight="energy_keeping", landing="prescribed")
+    tr = simulate_hopping(chain, cfg, seed=1)
+    assert tr.stop_reason == "" and len(tr.stances) == 3
+    reversed_tr = simulate_hopping(chain, dataclasses.replace(cfg, landing="reversed"), seed=1)
+    for rec, nxt in zip(tr.stances[:-1], tr.stances[1:]):
+        st, springs = rec.stance, rec.law.part(Eq3Law)
+
+        def energy(g, gd, rho, springs=springs, ref=st.ref):
+            return sum(mechanical_energy_j(chain, g, gd)) + float(springs.elastic_energy_j(rho, ref))
+
+        e_takeoff = energy(st.g[-1], st.gd[-1], st.rho_rad[-1])
+        assert abs(energy(nxt.touchdown.g, nxt.touchdown.gd, nxt.stance.rho_rad[0]) - e_takeoff) / e_takeoff < 1e-6
+        q_next, rates = nxt.touchdown.g[2:], nxt.touchdown.gd[2:]
+        v_to = com_velocity(chain, st.g[-1], st.gd[-1])
+        t_f = flight_time_s(chain, body_com(chain, st.g[-1])[1], v_to[1], q_next)
+        direction = prescribed_landing_direction(chain, st, q_next, float(v_to[0]), t_f)
+        j0 = com_offset_jacobian(chain, q_next)[0]
+        base = j0 * (float(v_to[0]) / float(j0 @ j0))
+        u = direction - j0 * (float(j0 @ direction) / float(j0 @ j0))
+        extra = rates - base
+        cosine = float(extra @ u) / (np.linalg.norm(extra) * np.linalg.norm(u))
+        assert cosine > 1.0 - 1e-9  # parallel, same sense
+    # ...and it is another landing than the reversed take-off rates'.
+    assert not np.allclose(tr.stances[1].touchdown.gd, reversed_tr.stances[1].touchdown.gd, atol=1e-3)
