@@ -55,6 +55,7 @@ from hop_impedance.simulation.scenarios import (
     DEFAULT_TOUCHDOWN_RHO,
     EXTRA_B1,
     EXTRA_K2,
+    PUSH_OFF_TIMING,
     PUSH_OFF_WEIGHTS,
     SEED_SUBJECT,
     Effects,
@@ -155,7 +156,7 @@ def sized_law(chain: Chain, freq_hz: float, effects: Effects, sizes: EffectSizes
     if not effects.push_off:
         return CompositeLaw((eq3,)), ts
     amp = sizes.push_fraction * float(np.max(nominal.moments_nm[:, 0])) * np.array(PUSH_OFF_WEIGHTS)
-    return CompositeLaw((eq3, PushOff(amp, 0.35 * ts, 0.6 * ts))), ts
+    return CompositeLaw((eq3, PushOff(amp, PUSH_OFF_TIMING[0] * ts, PUSH_OFF_TIMING[1] * ts))), ts
 
 
 @dataclass(frozen=True)
@@ -278,7 +279,7 @@ def _stance_set_law(chain: Chain, freq_hz: float, effects: Effects, sizes: Effec
     if sizes is None:
         passive = passive_law(freq_hz, effects)
         speed_nom, ts_nom = nominal_touchdown_speed(chain, passive, ground, rho_td, freq_hz)
-        law = build_law(freq_hz, effects, 0.35 * ts_nom, 0.6 * ts_nom)
+        law = build_law(freq_hz, effects, PUSH_OFF_TIMING[0] * ts_nom, PUSH_OFF_TIMING[1] * ts_nom)
     else:
         law, _ = sized_law(chain, freq_hz, effects, sizes, ground, rho_td)
         passive = CompositeLaw(tuple(p for p in law.parts if not isinstance(p, PushOff)))
