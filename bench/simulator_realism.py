@@ -424,18 +424,21 @@ def measure_all(freqs: str | None, measure_one) -> dict:
 def run_hopper(args: argparse.Namespace) -> tuple[dict, str]:
     """``--hopper seed-like``: the realism figures of the package's preset on its surface, and the setup line;
     ``--push-weights`` / ``--law-scale-file`` change the preset as bench/simulator_issue17.py's same flags do,
-    ``--trunk-gains K,B`` as its ``--trunk K,B`` and ``--flight energy_keeping`` as its ``--flight``."""
+    ``--trunk-gains K,B`` as its ``--trunk K,B``, ``--flight energy_keeping`` as its ``--flight``, and ``--push-timing`` /
+    ``--landing`` as its same flags."""
     options, variant = seed_like_hopper_options(), ""
     flight = None if args.flight == "prescribed" else args.flight
-    if args.push_weights or args.law_scale_file or args.trunk_gains or flight:
+    if args.push_weights or args.law_scale_file or args.trunk_gains or flight or args.push_timing or args.landing:
         import simulator_issue17 as s17  # a bench next to this one, which imports this one: not at the top
 
         options, _ = s17.variant_options(s17.VariantArgs(hopper="seed-like", surface=SEED_LIKE_HOPPER_SURFACE,
                                                          law_scale="none", push_weights=args.push_weights,
                                                          law_scale_file=args.law_scale_file, trunk=args.trunk_gains,
-                                                         flight=flight))
+                                                         flight=flight, push_timing=args.push_timing,
+                                                         landing=args.landing))
         variant = "".join(f" with {name} {value}" for name, value in (
-            ("push-off weights", args.push_weights), ("trunk balance", args.trunk_gains), ("flight", flight),
+            ("push-off weights", args.push_weights), ("push-off timing", args.push_timing),
+            ("trunk balance", args.trunk_gains), ("flight", flight), ("landing", args.landing),
             ("the law Table 2 x", args.law_scale_file)) if value)
     results = measure_all(args.freqs, lambda f: measure_hopper(f, options, SEED_LIKE_HOPPER_SURFACE, fits=args.fits))
     setup = (f"scenarios.seed_like_hopper_options() (the hopper of the bundled Table 1 recordings){variant} on the "
@@ -462,7 +465,11 @@ def main() -> None:
                              "trunk balance, late push-off); overrides --trunk and --contact (--posture, --push-timing "
                              "then vary it)")
     parser.add_argument("--push-timing", default=None,
-                        help="push-off onset, duration as fractions of the passive stance, e.g. 0.4,0.4 (after --seed-like)")
+                        help="push-off onset, duration as fractions of the passive stance, e.g. 0.4,0.4 (after --seed-like; "
+                             "with --hopper: instead of the preset's 0.6,0.8, not with --write)")
+    parser.add_argument("--landing", choices=("reversed", "prescribed"), default=None,
+                        help="with --hopper --flight energy_keeping: land along the take-off rates reversed (default) or "
+                             "along the prescribed flight's own landing motion (simulator_issue17.py's flag); not with --write")
     parser.add_argument("--bell", type=float, default=None, metavar="A_MIN",
                         help="the bell activation from A_MIN at touchdown over the passive stance "
                              "(hopping_config bell_activation_min; --seed-like: scenarios.SEED_LIKE_BELL_MIN, 0.7; "
@@ -490,10 +497,11 @@ def main() -> None:
     args = parser.parse_args()
     if args.hopper and (args.seed_like or args.freqs and args.write):
         parser.error("--hopper is the preset: not with --seed-like, and --write not with --freqs")
-    hopper_variant = args.push_weights or args.law_scale_file or args.trunk_gains
-    if (hopper_variant or args.hopper and args.flight != "prescribed") and (not args.hopper or args.write):
-        parser.error("--push-weights, --law-scale-file, --trunk-gains and --flight change --hopper's preset, and are not "
-                     "written")
+    hopper_variant = args.push_weights or args.law_scale_file or args.trunk_gains or args.landing
+    hopper_variant = hopper_variant or (args.hopper and (args.flight != "prescribed" or args.push_timing))
+    if hopper_variant and (not args.hopper or args.write):
+        parser.error("--push-weights, --law-scale-file, --trunk-gains, --landing and (with --hopper) --flight and "
+                     "--push-timing change --hopper's preset, and are not written")
     if args.hopper:
         t0 = time.perf_counter()
         results, setup = run_hopper(args)
