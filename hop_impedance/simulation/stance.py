@@ -87,6 +87,29 @@ class TouchdownState:
     gd: np.ndarray
 
 
+@dataclass(frozen=True)
+class StanceStart:
+    """A start inside the stance (issue 16, session 22; :func:`simulate_stance`'s ``start``).
+
+    The law's clock and reference (``rho0``, ``omega0``) stay the touchdown's (``simulate_stance``'s ``touchdown``):
+    the integration runs, and times are reported, from ``t_s`` (time since touchdown) on,
+    from ``state`` (the toe already in the surface, ``gd[0]`` 0: sticking), with the law's extra states at
+    ``law_states`` (their integrals from touchdown to ``t_s``; None: zeros).
+
+    Attributes
+    ----------
+    t_s : float
+        Time since touchdown of ``state`` (s), >= 0.
+    state : TouchdownState
+        ``[x_toe, z_toe, q1..q4]`` and rates at ``t_s``.
+    law_states : ndarray, shape (n_states,), or None
+    """
+
+    t_s: float
+    state: TouchdownState
+    law_states: np.ndarray | None = None
+
+
 @dataclass
 class StanceSimulation:
     """One integrated stance, sampled at the solver's or requested instants.
@@ -130,6 +153,8 @@ class StanceSimulation:
     friction_coefficient: float | None = None
     trunk_balance: TrunkBalance | None = None
     trunk_moments_nm: np.ndarray | None = None
+    #: Time since touchdown the integration started at (:class:`StanceStart`; 0: from the touchdown).
+    start_s: float = 0.0
 
     @property
     def slid(self) -> bool:
@@ -282,8 +307,9 @@ def simulate_stance(
     collapse_height_m: float = 0.3,
     friction_coefficient: float | None = None,
     trunk_balance: TrunkBalance | None = None,
+    start: StanceStart | None = None,
 ) -> StanceSimulation:
-    """Integrate one stance forward from a touchdown state.
+    """Integrate one stance forward from a touchdown state (or from a state inside the stance, ``start``).
 
     Parameters
     ----------
@@ -311,19 +337,30 @@ def simulate_stance(
         (:class:`~hop_impedance.simulation.hopping_trial.HoppingConfig`).
     trunk_balance : TrunkBalance or None
         Postural moment on the trunk added at the hip (None: the hip carries the law only).
+    start : StanceStart or None
+        From a state inside the stance (session 22; :class:`StanceStart`); None (default): from ``touchdown``.
 
     Returns
     -------
     StanceSimulation
     """
-    _check_stance_inputs(touchdown, friction_coefficient)
+    t0, y = _initial_state(touchdown, law, start)
+    _check_stance_inputs(TouchdownState(y[0:6], y[6:12]), friction_coefficient)
     system = _StanceSystem(chain, law, ground, touchdown, friction_coefficient, trunk_balance=trunk_balance)
-    y = np.concatenate([touchdown.g, touchdown.gd, np.zeros(law.n_states)])
     events = _stance_events(system, collapse_height_m)
-    run = _integrate_friction_phases(system, events, y, t_max_s, rtol, atol)
-    times = _report_times(run.steps, sample_times_s, run.t_end_s)
+    run = _integrate_friction_phases(system, events, y, t_max_s, rtol, atol, t0)
+    times = _report_times(run.steps, sample_times_s, run.t_end_s, t0)
     ys = run.dense(times).T if len(times) else np.zeros((0, len(y)))
-    return _collect(system, times, ys, run.end_reason, run.dense)
+    return _collect(system, times, ys, run.end_reason, run.dense, t0)
+
+
+def _initial_state(touchdown: TouchdownState, law: ImpedanceLaw, start: StanceStart | None) -> tuple[float, np.ndarray]:
+    """(time since touchdown, ODE state) the integration starts from: ``touchdown`` at 0 with the law's states 0, or
+    ``start``'s."""
+    if start is None:
+        return 0.0, np.concatenate([touchdown.g, touchdown.gd, np.zeros(law.n_states)])
+    states = np.zeros(law.n_states) if start.law_states is None else np.asarray(start.law_states, float)
+    return float(start.t_s), np.concatenate([start.state.g, start.state.gd, states])
 
 
 def _check_stance_inputs(touchdown: TouchdownState, friction_coefficient: float | None) -> None:
@@ -406,7 +443,7 @@ class _PhasesRun:
 
 
 def _integrate_friction_phases(system: _StanceSystem, events: _StanceEvents, y: np.ndarray, t_max_s: float,
-                               rtol: float, atol: float) -> _PhasesRun:
+                               rtol: float, atol: float, t_start_s: float = 0.0) -> _PhasesRun:
     """Integrate stick and slide phases in turn until take-off, collapse or ``t_max_s``.
 
     Each phase is one :func:`_integrate_phase` on the coordinates free in it (:class:`_PhaseState`);
@@ -416,7 +453,7 @@ def _integrate_friction_phases(system: _StanceSystem, events: _StanceEvents, y: 
     """
     dense = _PiecewiseDense()
     steps = []
-    t0, sign = 0.0, 0
+    t0, sign = t_start_s, 0
     for _ in range(MAX_FRICTION_PHASES):
         phase_events = events.for_phase(sign, system.mu is not None)
         phase = _PhaseState(sign, y.size, float(y[0]))
@@ -442,12 +479,13 @@ def _integrate_friction_phases(system: _StanceSystem, events: _StanceEvents, y: 
     raise RuntimeError(f"stance integration: more than {MAX_FRICTION_PHASES} stick/slip phases")
 
 
-def _report_times(steps: list, sample_times_s: np.ndarray | None, t_end_s: float) -> np.ndarray:
-    """Times since touchdown to report: the solver's own steps, or ``sample_times_s`` within [0, t_end_s]."""
+def _report_times(steps: list, sample_times_s: np.ndarray | None, t_end_s: float,
+                  t_start_s: float = 0.0) -> np.ndarray:
+    """Times since touchdown to report: the solver's own steps, or ``sample_times_s`` within [t_start_s, t_end_s]."""
     if sample_times_s is None:
         return np.unique(np.concatenate(steps))
     times = np.asarray(sample_times_s, float)
-    return times[(times >= 0) & (times <= t_end_s)]
+    return times[(times >= t_start_s) & (times <= t_end_s)]
 
 
 def _integrate_phase(rhs, span: tuple[float, float], y0: np.ndarray, events: list, rtol: float, atol: float):
@@ -479,7 +517,8 @@ def resample_stance(chain: Chain, law: ImpedanceLaw, ground: Ground, touchdown: 
     return _collect(system, t, stance.dense(t).T, stance.end_reason, stance.dense)
 
 
-def _collect(system: _StanceSystem, times: np.ndarray, ys: np.ndarray, end: str, dense) -> StanceSimulation:
+def _collect(system: _StanceSystem, times: np.ndarray, ys: np.ndarray, end: str, dense,
+             start_s: float = 0.0) -> StanceSimulation:
     n = len(times)
     out = {k: np.zeros((n, 6)) for k in ("g", "gd", "gdd")}
     grf, mom, rho, omg = (np.zeros((n, k)) for k in (2, 3, 3, 3))
@@ -493,7 +532,7 @@ def _collect(system: _StanceSystem, times: np.ndarray, ys: np.ndarray, end: str,
         trunk = np.zeros((n, 3))
         trunk[:, 2] = system.trunk.hip_moment_nm(out["g"][:, 5], out["gd"][:, 5], system.q4_touchdown)
     return StanceSimulation(times, out["g"], out["gd"], out["gdd"], grf, mom, rho, omg, states, end, system.ref, dense,
-                            tuple(system.phases), system.mu, system.trunk, trunk)
+                            tuple(system.phases), system.mu, system.trunk, trunk, start_s)
 
 
 def stance_energy_j(chain: Chain, law: ImpedanceLaw, ground: Ground, stance: StanceSimulation) -> np.ndarray:
