@@ -24,8 +24,17 @@ measured velocities; printed: the simulated minus measured take-off (as the gap'
 the window simulations LM took. ``--noisy``: the recording with the sensors' noise (1 mm markers, plate noise).
 ``--outside FILE ...``: the same on outside recordings with their truth law (``discovery_stance_edges``) instead.
 
+``--start-after D [D ...]`` (session 22, ``forward_selection.SIMULATE_FROM_S``): the same candidate-like true law
+simulated through ``forward_selection.simulate_for_gap`` from the measured touchdown state and from the measured state
+D s after the touchdown (``forward_selection.late_start``), each take-off read two-sided
+(``forward_selection.TWO_SIDED_DURATION``'s samples past the measured end, so a stance simulated too long counts);
+printed per D: the simulated minus measured take-off RMS [min, max] (ms), the true law's mean held-out gap G, and the
+measured toe velocity at the start; and, for comparison, the same from the touchdown with the velocities fitted
+(``forward_selection.TOUCHDOWN_VELOCITY_FIT_S`` = 0.06, one step), read two-sided too. With ``--noisy`` /
+``--outside`` as above.
+
 Usage: .venv/bin/python bench/discovery_touchdown_sensitivity.py [--freq 1.53] [--seed 0] [--hops 8]
-[--fit-velocities 0.06 [--noisy] [--outside FILE ...]]
+[--fit-velocities 0.06 | --start-after 0.02 0.04 0.06] [--noisy] [--outside FILE ...]
 """
 
 from __future__ import annotations
@@ -106,10 +115,47 @@ def take_off_errors(trial, laws, grounds, window_s: float, label: str) -> None:
           flush=True)
 
 
-def outside_fit(path: Path, window_s: float) -> None:
-    """:func:`take_off_errors` on an outside recording with its truth law (``discovery_truth_gap.outside_truth``)."""
+def late_start_errors(trial, laws, grounds, deltas: list[float], label: str) -> None:
+    """Print the true law's simulated minus measured take-off (two-sided) and mean gap from the measured touchdown
+    state and from the measured state ``delta`` s after it (``forward_selection.SIMULATE_FROM_S``), per ``delta``."""
+    level, scales = fs.take_off_level_n(trial), fs.gap_scales(trial)
+    t0 = time.perf_counter()
+    fs.TWO_SIDED_DURATION = True
+    for delta in (None, "fit", *deltas):
+        fs.TOUCHDOWN_VELOCITY_FIT_S = 0.06 if delta == "fit" else None
+        fs.SIMULATE_FROM_S = None if delta in (None, "fit") else delta
+        errs, gaps, vz = [], [], []
+        for s, law, ground in zip(trial.stances, laws, grounds):
+            measured = float(s.takeoff_s - s.touchdown_s)
+            late = fs.SIMULATE_FROM_S is not None
+            vz.append(fs.late_start(trial.chain, law, ground, s).state.gd[1] if late else s.touchdown.gd[1])
+            try:
+                sim = fs.simulate_for_gap(trial.chain, law, ground, s)
+            except RuntimeError:
+                errs.append(np.nan)
+                gaps.append(np.inf)
+                continue
+            errs.append(1e3 * (fs.simulated_take_off_s(sim, s, level) - measured))
+            gaps.append(fs._gap_of(sim, s, 0.0, scales, level)["gap"])
+        e = np.array(errs)
+        where = {None: "touchdown", "fit": "touchdown, velocities fitted on 60 ms (1 step)"}.get(delta) or \
+            f"{1e3 * delta:.0f} ms"
+        print(f"{label}: from {where}: take-off error RMS {np.sqrt(np.nanmean(e**2)):.1f} ms [{np.nanmin(e):+.1f}, "
+              f"{np.nanmax(e):+.1f}], failed {int(np.isnan(e).sum())}; true law's mean G {np.mean(gaps):.4f} "
+              f"[{np.min(gaps):.4f}, {np.max(gaps):.4f}]; measured toe vz at the start {np.mean(vz):+.3f} m/s "
+              f"[{np.min(vz):+.3f}, {np.max(vz):+.3f}]; per stance (ms) {np.round(e, 1).tolist()}", flush=True)
+    fs.SIMULATE_FROM_S, fs.TWO_SIDED_DURATION, fs.TOUCHDOWN_VELOCITY_FIT_S = None, False, None
+    print(f"  ({len(trial.stances)} stances, {time.perf_counter() - t0:.1f} s)", flush=True)
+
+
+def outside_fit(path: Path, window_s: float | None, deltas: list[float] | None = None) -> None:
+    """:func:`take_off_errors` (or with ``deltas`` :func:`late_start_errors`) on an outside recording with its truth
+    law (``discovery_truth_gap.outside_truth``)."""
     _, _, trial, _, laws, grounds = outside_truth(path, "estimated")
-    take_off_errors(trial, laws, grounds, window_s, path.stem)
+    if deltas:
+        late_start_errors(trial, laws, grounds, deltas, path.stem)
+    else:
+        take_off_errors(trial, laws, grounds, window_s, path.stem)
 
 
 def generator_touchdowns(chain, freq_hz: float, seed: int, hops: int):
@@ -127,13 +173,16 @@ def main() -> None:
     ap.add_argument("--hops", type=int, default=8)
     ap.add_argument("--fit-velocities", type=float, default=None, metavar="W",
                     help="the touchdown velocities fitted to the first W s (see the module docstring)")
-    ap.add_argument("--noisy", action="store_true", help="with the sensors' noise (with --fit-velocities)")
-    ap.add_argument("--outside", nargs="*", default=None, help="outside recordings instead (with --fit-velocities)")
+    ap.add_argument("--start-after", type=float, nargs="+", default=None, metavar="D",
+                    help="also from the measured state D s after the touchdown (see the module docstring)")
+    ap.add_argument("--noisy", action="store_true", help="with the sensors' noise (with --fit-velocities/--start-after)")
+    ap.add_argument("--outside", nargs="*", default=None,
+                    help="outside recordings instead (with --fit-velocities/--start-after)")
     args = ap.parse_args()
-    if args.fit_velocities is not None:
+    if args.fit_velocities is not None or args.start_after:
         if args.outside is not None:
             for f in args.outside:
-                outside_fit(Path(f), args.fit_velocities)
+                outside_fit(Path(f), args.fit_velocities, args.start_after)
             return
         sensors = SensorConfig() if args.noisy else noise_free(SensorConfig())
         rec, _ = sset.simulate_stance_set_recording(args.freq, ("rigid",), args.hops, args.seed, NULL, sensors)
@@ -141,8 +190,11 @@ def main() -> None:
         law, _, _ = sset._stance_set_law(trial.chain, args.freq, NULL, None, sset.RIGID_NO_BOUNCE, DEFAULT_TOUCHDOWN_RHO)
         k0 = np.array(law.parts[0].k0, float)[:, None]
         laws = [fitted_law("estimated", ModelSpec(), k0, touchdown_moments(ModelSpec(), k0, s), s) for s in trial.stances]
-        take_off_errors(trial, laws, [sset.RIGID_NO_BOUNCE] * len(laws), args.fit_velocities,
-                        f"our simulator's null, {args.freq} Hz, seed {args.seed}{', noisy' if args.noisy else ''}")
+        label = f"our simulator's null, {args.freq} Hz, seed {args.seed}{', noisy' if args.noisy else ''}"
+        if args.start_after:
+            late_start_errors(trial, laws, [sset.RIGID_NO_BOUNCE] * len(laws), args.start_after, label)
+        else:
+            take_off_errors(trial, laws, [sset.RIGID_NO_BOUNCE] * len(laws), args.fit_velocities, label)
         return
     rec, truth = sset.simulate_stance_set_recording(args.freq, ("rigid",), args.hops, args.seed, NULL,
                                                     noise_free(SensorConfig()))

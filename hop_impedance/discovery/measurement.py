@@ -65,6 +65,22 @@ TOUCHDOWN_KINK_DEGREE = 3
 
 
 @dataclass
+class StanceKinematics:
+    """The low-passed kinematics of one stance on the plate's samples, from two samples before its first (session 22).
+
+    ``first``: the index of the stance's first sample in these arrays; ``t_s``: plate times (s); ``q``, ``qd``: segment
+    angles and rates (N, 4); ``com_xz``: segment COMs (N, segments, 2); ``points_xz``: the toe (N, 1, 2).
+    """
+
+    first: int
+    t_s: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    com_xz: np.ndarray
+    points_xz: np.ndarray
+
+
+@dataclass
 class MeasuredStance:
     """One analysed stance (arrays on the force-plate samples inside the stance).
 
@@ -87,6 +103,9 @@ class MeasuredStance:
         ``g = [x_toe, 0, q1..q4]``, ``gd = [0, vz_toe, qd1..qd4]`` at touchdown.
     flight_fz_n : ndarray, shape (F,)
         Raw vertical force in the flight before this stance (N), margins trimmed.
+    kinematics : StanceKinematics or None
+        The low-passed kinematics the touchdown state is built from, over the stance, for a state at a later sample
+        (:func:`filtered_state`; session 22).
     """
 
     index: int
@@ -101,6 +120,7 @@ class MeasuredStance:
     toe_dz_m: np.ndarray
     touchdown: TouchdownState
     flight_fz_n: np.ndarray
+    kinematics: StanceKinematics | None = None
 
     @property
     def abs_t_s(self) -> np.ndarray:
@@ -290,7 +310,26 @@ def _measured_stance(s, sel, force: tuple, kin, chain: Chain, prev_takeoff_s: fl
         rho_rad=np.asarray(j.angle_rad), omega_rad_s=np.asarray(j.angular_velocity_rad_s),
         moment_nm=np.asarray(j.moment_nm), fz_raw_n=fz_raw[idx], fz_lp_n=fz_lp[idx],
         toe_dz_m=toe_z - toe_z[0], touchdown=TouchdownState(g0, gd0), flight_fz_n=fz_raw[fl],
+        kinematics=_stance_kinematics(t_f, kin_td, idx),
     )
+
+
+def _stance_kinematics(t_f, kin, idx: np.ndarray) -> StanceKinematics:
+    """:class:`StanceKinematics` of the stance on plate samples ``idx`` (copies of ``kin``'s rows there)."""
+    lo, hi = max(int(idx[0]) - 2, 0), int(idx[-1]) + 3
+    rows = [np.array(a[lo:hi]) for a in (t_f, kin.q, kin.qd, kin.com_xz, kin.points_xz[:, :1])]
+    return StanceKinematics(int(idx[0]) - lo, *rows)
+
+
+def filtered_state(s: MeasuredStance, chain: Chain, k: int) -> TouchdownState:
+    """The state at the stance's sample ``k`` from the low-passed kinematics, built as the default touchdown state
+    (:func:`_filtered_touchdown_state`; at ``k`` = 0 the same numbers), ``z_toe`` 0 (session 22: a held-out stance
+    simulated from a sample after the impact, ``forward_selection.SIMULATE_FROM_S``)."""
+    kin = s.kinematics
+    if kin is None:
+        raise ValueError(f"stance {s.index}: no kinematics kept for a state inside the stance")
+    g, gd = _filtered_touchdown_state(kin.t_s, kin, chain, kin.first + int(k))
+    return TouchdownState(g, gd)
 
 
 def _filtered_touchdown_state(t_f, kin, chain: Chain, i0: int) -> tuple[np.ndarray, np.ndarray]:
