@@ -47,7 +47,8 @@ corrected on the stance's first W s of joint angles; session 17's option, off by
 ``forward_selection.ENERGY_PAIRS`` (session 19's option: a loss and the push-off replacing it tried together when no
 single candidate passes); ``--velocity-fit-shared`` / ``--accept-step``: ``forward_selection.VELOCITY_FIT_SHARED`` /
 ``VELOCITY_FIT_ACCEPT`` (session 20's sub-options of the velocity fit: one fitted state per stance for every model;
-the step checked); set in this
+the step checked); ``--simulate-from D``: ``forward_selection.SIMULATE_FROM_S`` (session 22's option: every held-out
+stance simulated from the measured state D s after its touchdown, compared from there); set in this
 process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
@@ -167,6 +168,9 @@ def main() -> None:
     ap.add_argument("--touchdown-velocity-fit", type=float, default=None, metavar="W",
                     help="forward_selection.TOUCHDOWN_VELOCITY_FIT_S = W: each model's touchdown velocities corrected "
                          "on the stance's first W s (session 17's option)")
+    ap.add_argument("--simulate-from", type=float, default=None, metavar="D",
+                    help="forward_selection.SIMULATE_FROM_S = D: held-out stances simulated from the measured state "
+                         "D s after touchdown (session 22's option)")
     ap.add_argument("--angle-terms", default=None, metavar="TERMS",
                     help="model.ANGLE_TERMS, e.g. k1 (seed 000's Eq. 10) or k1,k2 (Eq. 3, the default)")
     ap.add_argument("--energy-pairs", action="store_true",
@@ -222,6 +226,7 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--log-ratio-cap", forward_selection, "LOG_RATIO_CAP", args.log_ratio_cap),
             ("--eq7-fit", identify, "EQ7_FIT", True if args.eq7_fit else None),
             ("--touchdown-velocity-fit", forward_selection, "TOUCHDOWN_VELOCITY_FIT_S", args.touchdown_velocity_fit),
+            ("--simulate-from", forward_selection, "SIMULATE_FROM_S", args.simulate_from),
             ("--angle-terms", model, "ANGLE_TERMS", tuple(args.angle_terms.split(",")) if args.angle_terms else None),
             ("--energy-pairs", forward_selection, "ENERGY_PAIRS", True if args.energy_pairs else None),
             ("--velocity-fit-shared", forward_selection, "VELOCITY_FIT_SHARED", True if args.velocity_fit_shared else None),

@@ -22,8 +22,13 @@ round's held-out screen (p, pooled shrink) and the stiffness gate's p.
 comparison, fitted under the candidate's or the current model's law; acts in ``discover``'s comparisons only, so the
 per-stance table is the per-model fit's). ``--fit-only``: skip the runs without the fit (the default's, known).
 
+``--simulate-from D`` (session 22): ``forward_selection.SIMULATE_FROM_S`` = D instead of the fit in the runs "with"
+(every held-out stance simulated from the measured state D s after its touchdown and compared from there; the fit
+column then reads ``from D``).
+
 Usage: .venv/bin/python bench/discovery_stance_terms.py REC.mcap [--touchdown-velocity-fit 0.06] [--stances 5,6,8]
        [--discover] [--accept-step] [--own-ground-jacobian] [--shared] [--paired candidate|current] [--fit-only]
+       [--simulate-from 0.06]
 """
 
 from __future__ import annotations
@@ -51,6 +56,8 @@ def main() -> None:
     ap.add_argument("--paired", choices=("candidate", "current"), default=None,
                     help="forward_selection.PAIRED_VELOCITY_STATE")
     ap.add_argument("--fit-only", action="store_true", help="only the runs with the fit")
+    ap.add_argument("--simulate-from", type=float, default=None, metavar="D",
+                    help="forward_selection.SIMULATE_FROM_S = D instead of the fit (session 22)")
     args = ap.parse_args()
     fs.PAIRED_VELOCITY_STATE = args.paired
     fs.VELOCITY_FIT_SHARED = args.shared
@@ -63,9 +70,16 @@ def main() -> None:
     picked = [int(k) for k in args.stances.split(",") if k] or range(len(trial.stances))
     print("stance  fit     G       GRF  ang_a ang_k ang_h mom_a mom_k mom_h  duration ms  work sim / measured J  end")
     means = {}
-    windows = (args.touchdown_velocity_fit,) if args.fit_only else (None, args.touchdown_velocity_fit)
+    with_fit = f"from {args.simulate_from}" if args.simulate_from is not None else args.touchdown_velocity_fit
+    windows = (with_fit,) if args.fit_only else (None, with_fit)
+
+    def configure(window) -> None:  # before the evaluator forks its workers, which read it
+        late = isinstance(window, str)
+        fs.TOUCHDOWN_VELOCITY_FIT_S = None if late else window
+        fs.SIMULATE_FROM_S = args.simulate_from if late else None
+
     for window in windows:
-        fs.TOUCHDOWN_VELOCITY_FIT_S = window  # before the evaluator forks its workers, which read it
+        configure(window)
         with fs.HeldOutEvaluator(rec, trial) as ev:  # discovery's own leave-one-out runs of the baseline
             r = ev.run(ModelSpec(), [None])[0]
         for k in picked:
@@ -78,7 +92,7 @@ def main() -> None:
         from hop_impedance.discovery.workflow import discover
 
         for window in windows:
-            fs.TOUCHDOWN_VELOCITY_FIT_S = window
+            configure(window)
             doc = discover(rec)
             print(f"discover, fit {window}: named {doc['effects_found'] or 'nothing'}, baseline gap "
                   f"{doc['baseline_gap']['total']:.3f}, {doc['timing']['total_s']:.0f} s")
