@@ -82,6 +82,8 @@ def main() -> None:
         configure(window)
         with fs.HeldOutEvaluator(rec, trial) as ev:  # discovery's own leave-one-out runs of the baseline
             r = ev.run(ModelSpec(), [None])[0]
+        if isinstance(window, str):  # the simulated work is from the start on: the measured work over the same samples
+            measured = np.array([fs.measured_net_work_j(s, fs.start_index(s)) for s in trial.stances])
         for k in picked:
             terms = " ".join(f"{v:5.2f}" for v in r.rms[k] / scales[:7])
             print(f"{k:>6}  {str(window):<6} {r.gaps[k]:7.3f}  {terms}  {1e3 * r.duration_error_s[k]:+8.0f}  "

@@ -742,6 +742,8 @@ def simulated_mean(x: np.ndarray) -> float | None:
 def physics_evidence(trial: MeasuredTrial, current: HeldOutRuns, cand: HeldOutRuns) -> dict:
     """Energy balance, stance-to-stance variation, flight force and latency of one candidate."""
     w_meas = measured_net_works_j(trial)
+    # the simulated work is over the samples compared: from :func:`start_index` on (0 without SIMULATE_FROM_S)
+    w_compared = np.array([measured_net_work_j(s, start_index(s)) for s in trial.stances])
     n = len(w_meas)
     se = float(np.std(w_meas, ddof=1) / np.sqrt(n)) if n > 1 else float("nan")
     flight = np.concatenate([s.flight_fz_n for s in trial.stances])
@@ -751,8 +753,8 @@ def physics_evidence(trial: MeasuredTrial, current: HeldOutRuns, cand: HeldOutRu
                                       "p_positive": one_sided_t(w_meas)},
         "simulated_net_joint_work_j": {"mean": simulated_mean(cand.net_work_j),
                                        "per_stance": np.round(cand.net_work_j, 2).tolist()},
-        "work_mismatch_j": {"candidate": simulated_mean(np.abs(cand.net_work_j - w_meas)),
-                            "current": simulated_mean(np.abs(current.net_work_j - w_meas))},
+        "work_mismatch_j": {"candidate": simulated_mean(np.abs(cand.net_work_j - w_compared)),
+                            "current": simulated_mean(np.abs(current.net_work_j - w_compared))},
         "per_stance_gap_current": np.round(current.gaps, 5).tolist(),
         "per_stance_gap_candidate": np.round(cand.gaps, 5).tolist(),
         "stance_to_stance_cv_of_gap_ratio": float(np.std(cand.gaps / current.gaps) / np.mean(cand.gaps / current.gaps))
