@@ -353,7 +353,7 @@ def start_index(s: MeasuredStance) -> int:
     since the touchdown (at most the stance's tenth-last), 0 without it."""
     if SIMULATE_FROM_S is None:
         return 0
-    return int(min(np.searchsorted(s.t_s, float(SIMULATE_FROM_S) - 1e-9), len(s.t_s) - 10))
+    return min(int(np.searchsorted(s.t_s, float(SIMULATE_FROM_S) - 1e-9)), len(s.t_s) - 10)
 
 
 def late_start(chain, law, ground, s: MeasuredStance, offset_n: float = 0.0) -> StanceStart:
