@@ -429,6 +429,9 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--landing", choices=("reversed", "prescribed"), default=None,
                         help="with --flight energy_keeping: land along the take-off rates reversed (default) or along "
                              "the prescribed flight's own landing motion (HoppingConfig.landing; same energy)")
+    parser.add_argument("--push-off-gain", type=float, default=None, metavar="G",
+                        help="the hop-by-hop push-off controller's gain as a fraction of its deadbeat one "
+                             "(HoppingConfig.push_off_gain; default 1)")
 
 
 def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
@@ -478,6 +481,9 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     if args.landing:
         options["landing"] = args.landing
         said.append(f"landing {args.landing}")
+    if args.push_off_gain is not None:
+        options["push_off_gain"] = args.push_off_gain
+        said.append(f"push-off gain {args.push_off_gain:g}")
     return options, f"scenarios.{'seed_like_hopper_options' if preset else 'seed_like_options'}(), " + ", ".join(said)
 
 
@@ -501,7 +507,7 @@ def main() -> None:
     freqs = tuple(f for f in FREQS if f in floats(args.freqs))
     variant = any((args.bell is not None, args.law_scale != "none",
                    args.pad, args.posture, args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS,
-                   args.push_weights, args.law_scale_file, args.flight, args.landing,
+                   args.push_weights, args.law_scale_file, args.flight, args.landing, args.push_off_gain is not None,
                    args.no_seed001, args.seed != 1))
     # the table kept in docs/simulator.md: the bundled recordings' preset (--hopper seed-like --surface rigid) or the
     # library's default options; nothing else, so that the docs never show a variant as the simulator

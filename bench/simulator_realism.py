@@ -428,17 +428,20 @@ def run_hopper(args: argparse.Namespace) -> tuple[dict, str]:
     ``--landing`` as its same flags."""
     options, variant = seed_like_hopper_options(), ""
     flight = None if args.flight == "prescribed" else args.flight
-    if args.push_weights or args.law_scale_file or args.trunk_gains or flight or args.push_timing or args.landing:
+    gain = args.push_off_gain
+    changed = args.push_weights or args.law_scale_file or args.trunk_gains or flight or args.push_timing or args.landing
+    if changed or gain is not None:
         import simulator_issue17 as s17  # a bench next to this one, which imports this one: not at the top
 
         options, _ = s17.variant_options(s17.VariantArgs(hopper="seed-like", surface=SEED_LIKE_HOPPER_SURFACE,
                                                          law_scale="none", push_weights=args.push_weights,
                                                          law_scale_file=args.law_scale_file, trunk=args.trunk_gains,
                                                          flight=flight, push_timing=args.push_timing,
-                                                         landing=args.landing))
+                                                         landing=args.landing, push_off_gain=gain))
         variant = "".join(f" with {name} {value}" for name, value in (
             ("push-off weights", args.push_weights), ("push-off timing", args.push_timing),
             ("trunk balance", args.trunk_gains), ("flight", flight), ("landing", args.landing),
+            ("push-off gain", None if gain is None else f"{gain:g}"),
             ("the law Table 2 x", args.law_scale_file)) if value)
     results = measure_all(args.freqs, lambda f: measure_hopper(f, options, SEED_LIKE_HOPPER_SURFACE, fits=args.fits))
     setup = (f"scenarios.seed_like_hopper_options() (the hopper of the bundled Table 1 recordings){variant} on the "
@@ -470,6 +473,9 @@ def main() -> None:
     parser.add_argument("--landing", choices=("reversed", "prescribed"), default=None,
                         help="with --hopper --flight energy_keeping: land along the take-off rates reversed (default) or "
                              "along the prescribed flight's own landing motion (simulator_issue17.py's flag); not with --write")
+    parser.add_argument("--push-off-gain", type=float, default=None, metavar="G",
+                        help="with --hopper: the hop-by-hop push-off controller's gain as a fraction of its deadbeat one "
+                             "(simulator_issue17.py's flag; default 1); not with --write")
     parser.add_argument("--bell", type=float, default=None, metavar="A_MIN",
                         help="the bell activation from A_MIN at touchdown over the passive stance "
                              "(hopping_config bell_activation_min; --seed-like: scenarios.SEED_LIKE_BELL_MIN, 0.7; "
@@ -498,10 +504,11 @@ def main() -> None:
     if args.hopper and (args.seed_like or args.freqs and args.write):
         parser.error("--hopper is the preset: not with --seed-like, and --write not with --freqs")
     hopper_variant = args.push_weights or args.law_scale_file or args.trunk_gains or args.landing
+    hopper_variant = hopper_variant or args.push_off_gain is not None
     hopper_variant = hopper_variant or (args.hopper and (args.flight != "prescribed" or args.push_timing))
     if hopper_variant and (not args.hopper or args.write):
-        parser.error("--push-weights, --law-scale-file, --trunk-gains, --landing and (with --hopper) --flight and "
-                     "--push-timing change --hopper's preset, and are not written")
+        parser.error("--push-weights, --law-scale-file, --trunk-gains, --landing, --push-off-gain and (with --hopper) "
+                     "--flight and --push-timing change --hopper's preset, and are not written")
     if args.hopper:
         t0 = time.perf_counter()
         results, setup = run_hopper(args)

@@ -194,6 +194,10 @@ class HoppingConfig:
         its quintic arrives at rest, so the direction is that of its last motion, the third derivative at
         touchdown), i.e. the preset's own landing motion, chosen in flight as a practised landing; the energy
         the flight carries is unchanged, only its direction. The calibration's rounds use it too.
+    push_off_gain : float
+        The hop-by-hop push-off controller's gain as a fraction of its deadbeat one (:func:`_hop_push_scale`:
+        the push-off scale is corrected by ``push_off_gain (target - speed) / d_speed_d_scale``). 1 (default):
+        the deadbeat correction; smaller: a partial correction per hop (a steadier push-off).
     """
 
     freq_hz: float
@@ -218,6 +222,7 @@ class HoppingConfig:
     first_touchdown: tuple[float, ...] | None = None
     landing_feedback: LandingFeedback | None = None
     landing: str = "reversed"
+    push_off_gain: float = 1.0
 
     def __post_init__(self) -> None:
         if self.flight not in FLIGHT_MODELS:
@@ -228,6 +233,8 @@ class HoppingConfig:
             raise ValueError(f"freq_hz must be positive, got {self.freq_hz}")
         if self.n_hops < 1:
             raise ValueError(f"n_hops must be at least 1, got {self.n_hops}")
+        if not self.push_off_gain >= 0:
+            raise ValueError(f"push_off_gain must be non-negative, got {self.push_off_gain}")
 
     def surface_for_hop(self, hop: int) -> Ground:
         """Surface under hop ``hop`` (0-based)."""
@@ -839,12 +846,12 @@ def _lead_in_flight(chain: Chain, config: HoppingConfig, q_td: np.ndarray, rates
 
 def _hop_push_scale(config: HoppingConfig, cal: HopCalibration, speed: float, rng: np.random.Generator) -> float:
     """Push-off scale of a hop: the calibrated one, corrected by the proportional controller towards a seeded
-    target touchdown speed (``speed_sd``) and varied by ``push_sd``."""
+    target touchdown speed (``speed_sd``; ``push_off_gain`` of the deadbeat correction) and varied by ``push_sd``."""
     gain = cal.d_speed_d_scale
     target = cal.speed_m_s * (1.0 + rng.normal(0.0, config.speed_sd))
     scale = cal.push_scale
     if gain > 0:
-        scale += (target - speed) / gain
+        scale += config.push_off_gain * (target - speed) / gain
     scale *= 1.0 + rng.normal(0.0, config.push_sd)
     return scale
 

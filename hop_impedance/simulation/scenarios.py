@@ -316,7 +316,7 @@ def hopping_config(
     push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     hip_trunk_spring_nm_rad: float = 0.0,
     bell_activation_min: float | None = None, law_scale: dict | None = None,
-    pad: GroundLaw | None = None, push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS,
+    pad: GroundLaw | None = None, push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS, push_off_gain: float = 1.0,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
@@ -325,17 +325,17 @@ def hopping_config(
     (default: the trial's surface) is the surface the law is tuned for; with ``unexpected_surface`` the listed hops
     land on that surface instead. ``trunk_balance`` (e.g. :data:`TRUNK_BALANCE`) and ``flight`` are passed to
     :class:`HoppingConfig` (defaults: none, prescribed flight), and so is ``landing`` (:attr:`HoppingConfig.landing`,
-    default "reversed"). ``contact_ahead_m``
-    moves the ground contact that far in front of the toe marker (:func:`contact_ahead_of_toe_marker`;
-    e.g. :func:`toe_tip_ahead_m`, the seed's hinge at the tip of the toe; default 0, the marker).
+    default "reversed"). ``contact_ahead_m`` moves the ground contact that far in front of the toe marker
+    (:func:`contact_ahead_of_toe_marker`; e.g. :func:`toe_tip_ahead_m`, the seed's hinge at the tip of the toe; default 0).
     ``hip_trunk_spring_nm_rad`` (e.g. :data:`HIP_TRUNK_SPRING_NM_RAD`) holds the trunk by a hip spring
     about the touchdown hip angle, added to the Table 2 hip k0 (so the truth file's hip law is the whole
     hip law): the conservative alternative to ``trunk_balance`` (default 0, none). ``bell_activation_min``
     (:data:`SEED_LIKE_BELL_MIN`; None: none): a :class:`BellActivation` from it over the passive stance; ``law_scale``
     (:data:`SEED_LIKE_LAW_SCALE`; None: Table 2): factors on Table 2's k0, k1 (:func:`law_scale_at`), in the truth.
     ``pad`` (e.g. :data:`SHOE_PAD`; None: none): an elastic pad in series with every surface of the trial
-    (:class:`~hop_impedance.simulation.ground.PaddedGround`), stated in the truth file's surface. ``push_weights``:
-    the push-off's amplitude per joint in units of :data:`PUSH_OFF_BASE_NM` (default :data:`PUSH_OFF_WEIGHTS`).
+    (:class:`~hop_impedance.simulation.ground.PaddedGround`), stated in the truth file's surface. ``push_weights``: the
+    push-off's amplitude per joint in units of :data:`PUSH_OFF_BASE_NM` (default :data:`PUSH_OFF_WEIGHTS`); ``push_off_gain``:
+    :attr:`HoppingConfig.push_off_gain` (default 1, the deadbeat hop-by-hop controller).
     """
     chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
     expected = with_pad(surface(calibration_surface or surface_name), pad)
@@ -352,7 +352,7 @@ def hopping_config(
         posture_sd_rad=0.01 if variability else 0.0, speed_sd=0.02 if variability else 0.0,
         push_sd=0.03 if variability else 0.0,
         trunk_balance=trunk_balance,
-        flight=flight, landing=landing,
+        flight=flight, landing=landing, push_off_gain=push_off_gain,
     )
     if surface_name != (calibration_surface or surface_name):
         config = HoppingConfig(**{**config.__dict__, "unexpected_surface": with_pad(surface(surface_name), pad),
