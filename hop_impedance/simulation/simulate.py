@@ -31,7 +31,7 @@ def simulate_recording(
     flight: str = "prescribed", landing: str = "reversed", contact_ahead_m: float = 0.0,
     push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     bell_activation_min: float | None = None, law_scale: dict | None = None, pad: GroundLaw | None = None,
-    push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS,
+    push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS, push_off_gain: float = 1.0,
 ) -> tuple[Recording, dict]:
     """Simulate a hopping trial and sample it as a contract recording.
 
@@ -65,7 +65,7 @@ def simulate_recording(
         Trunk-balance moment at the hip, flight model and its landing, ground contact ahead of the toe marker (m) and
         push-off onset/duration as fractions of the passive stance (:func:`hopping_config`; defaults:
         none, prescribed, reversed, 0 = at the marker, :data:`PUSH_OFF_TIMING`); ``bell_activation_min``, ``law_scale``, ``pad``,
-        ``push_weights`` too; :func:`seed_like_options` bundles issue 17's candidate.
+        ``push_weights``, ``push_off_gain`` too; :func:`seed_like_options` bundles issue 17's candidate.
 
     Returns
     -------
@@ -76,7 +76,7 @@ def simulate_recording(
         unexpected_surface=unexpected_surface, unexpected_hops=unexpected_hops, calibration_surface=tuned_for,
         variability=variability, trunk_balance=trunk_balance, flight=flight, landing=landing, contact_ahead_m=contact_ahead_m,
         push_timing=push_timing, bell_activation_min=bell_activation_min, law_scale=law_scale, pad=pad,
-        push_weights=push_weights)
+        push_weights=push_weights, push_off_gain=push_off_gain)
     trial = simulate_hopping(chain, config, seed=seed)
     recording, sensor_truth = sample_recording(trial, sensors, subject, np.random.default_rng([seed, 1]))
     gen = {"seed": seed, "freq_hz": freq_hz, "surface": surface_name, "n_hops": n_hops,
