@@ -66,7 +66,6 @@ def main() -> None:
     rec = load_recording(args.recording)
     trial = measure_trial(rec)
     scales = fs.gap_scales(trial)
-    measured = fs.measured_net_works_j(trial)
     picked = [int(k) for k in args.stances.split(",") if k] or range(len(trial.stances))
     print("stance  fit     G       GRF  ang_a ang_k ang_h mom_a mom_k mom_h  duration ms  work sim / measured J  end")
     means = {}
@@ -82,8 +81,7 @@ def main() -> None:
         configure(window)
         with fs.HeldOutEvaluator(rec, trial) as ev:  # discovery's own leave-one-out runs of the baseline
             r = ev.run(ModelSpec(), [None])[0]
-        if isinstance(window, str):  # the simulated work is from the start on: the measured work over the same samples
-            measured = np.array([fs.measured_net_work_j(s, fs.start_index(s)) for s in trial.stances])
+        measured = fs.measured_net_works_j(trial, compared=True)  # over the samples the simulated work is over
         for k in picked:
             terms = " ".join(f"{v:5.2f}" for v in r.rms[k] / scales[:7])
             print(f"{k:>6}  {str(window):<6} {r.gaps[k]:7.3f}  {terms}  {1e3 * r.duration_error_s[k]:+8.0f}  "

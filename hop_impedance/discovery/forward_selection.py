@@ -243,9 +243,11 @@ def measured_net_work_j(s: MeasuredStance, first: int = 0) -> float:
     return float(np.sum(trapezoid(-s.moment_nm[first:] * s.omega_rad_s[first:], s.t_s[first:], axis=0)))
 
 
-def measured_net_works_j(trial: MeasuredTrial) -> np.ndarray:
-    """:func:`measured_net_work_j` of every stance of ``trial`` (J), in order."""
-    return np.array([measured_net_work_j(s) for s in trial.stances])
+def measured_net_works_j(trial: MeasuredTrial, compared: bool = False) -> np.ndarray:
+    """:func:`measured_net_work_j` of every stance of ``trial`` (J), in order; with ``compared`` from each stance's
+    :func:`start_index` on, the samples a held-out simulation is compared over (the whole stance without
+    :data:`SIMULATE_FROM_S`)."""
+    return np.array([measured_net_work_j(s, start_index(s) if compared else 0) for s in trial.stances])
 
 
 def gap_scales(trial: MeasuredTrial) -> np.ndarray:
@@ -748,7 +750,7 @@ def physics_evidence(trial: MeasuredTrial, current: HeldOutRuns, cand: HeldOutRu
     """Energy balance, stance-to-stance variation, flight force and latency of one candidate."""
     w_meas = measured_net_works_j(trial)
     # the simulated work is over the samples compared: from :func:`start_index` on (0 without SIMULATE_FROM_S)
-    w_compared = np.array([measured_net_work_j(s, start_index(s)) for s in trial.stances])
+    w_compared = measured_net_works_j(trial, compared=True)
     n = len(w_meas)
     se = float(np.std(w_meas, ddof=1) / np.sqrt(n)) if n > 1 else float("nan")
     flight = np.concatenate([s.flight_fz_n for s in trial.stances])
