@@ -421,6 +421,13 @@ def measure_all(freqs: str | None, measure_one) -> dict:
     return results
 
 
+def preset_changed(args: argparse.Namespace) -> bool:
+    """Whether the command line changes ``--hopper``'s preset: a flag that acts on it only, or ``--flight`` /
+    ``--push-timing`` with ``--hopper`` (without it they vary the other hoppers)."""
+    only_preset = (args.push_weights, args.law_scale_file, args.trunk_gains, args.landing, args.push_off_gain is not None)
+    return bool(any(only_preset) or args.hopper and (args.flight != "prescribed" or args.push_timing))
+
+
 def run_hopper(args: argparse.Namespace) -> tuple[dict, str]:
     """``--hopper seed-like``: the realism figures of the package's preset on its surface, and the setup line;
     ``--push-weights`` / ``--law-scale-file`` change the preset as bench/simulator_issue17.py's same flags do,
@@ -429,8 +436,7 @@ def run_hopper(args: argparse.Namespace) -> tuple[dict, str]:
     options, variant = seed_like_hopper_options(), ""
     flight = None if args.flight == "prescribed" else args.flight
     gain = args.push_off_gain
-    changed = args.push_weights or args.law_scale_file or args.trunk_gains or flight or args.push_timing or args.landing
-    if changed or gain is not None:
+    if preset_changed(args):
         import simulator_issue17 as s17  # a bench next to this one, which imports this one: not at the top
 
         options, _ = s17.variant_options(s17.VariantArgs(hopper="seed-like", surface=SEED_LIKE_HOPPER_SURFACE,
@@ -503,10 +509,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.hopper and (args.seed_like or args.freqs and args.write):
         parser.error("--hopper is the preset: not with --seed-like, and --write not with --freqs")
-    hopper_variant = args.push_weights or args.law_scale_file or args.trunk_gains or args.landing
-    hopper_variant = hopper_variant or args.push_off_gain is not None
-    hopper_variant = hopper_variant or (args.hopper and (args.flight != "prescribed" or args.push_timing))
-    if hopper_variant and (not args.hopper or args.write):
+    if preset_changed(args) and (not args.hopper or args.write):
         parser.error("--push-weights, --law-scale-file, --trunk-gains, --landing, --push-off-gain and (with --hopper) "
                      "--flight and --push-timing change --hopper's preset, and are not written")
     if args.hopper:
