@@ -78,6 +78,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simulator_realism import (  # noqa: E402  (a bench next to this one)
     SEED_TABLE1,
     binding_cells,
+    law_moment_cause,
     replace_between_markers,
     summarise,
 )
@@ -263,6 +264,16 @@ def percent(x: float) -> str:
     return f"{100 * x:+.0f} %"
 
 
+def cause_mark(name: str, freq_hz: float, realism: dict) -> str:
+    """' (the seed's tables)' after a maximal-moment cell out that :func:`simulator_realism.law_moment_cause` explains
+    (the printed cause in bench/simulator_realism.py's list of cells out)."""
+    if "max moment" not in name:
+        return ""
+    joint = ("ankle", "knee").index(name.split()[0])
+    found = law_moment_cause(freq_hz, joint, realism["mmax"][joint], realism["rom"][joint])
+    return " (cause: the seed's Table 2 law over the range, simulator_realism.law_moment_cause)" if found else ""
+
+
 def realism_rows(measures: dict) -> tuple[list[Row], list[str]]:
     """One row per binding Table 1 quantity (all three frequencies) and issue 17's rule on the cells out."""
     cells = binding_cells({f: m.realism for f, m in measures.items()})
@@ -271,7 +282,7 @@ def realism_rows(measures: dict) -> tuple[list[Row], list[str]]:
         mine = [c for c in cells if c[0] == name]
         devs = [(f, sim / seed - 1.0) for _, f, sim, seed, _ in mine]
         band = mine[0][4]
-        out += [f"{name} at {f:g} Hz" for f, d in devs if not abs(d) <= band]
+        out += [f"{name} at {f:g} Hz" + cause_mark(name, f, measures[f].realism) for f, d in devs if not abs(d) <= band]
         rows.append(Row(f"Table 1 {name}", ", ".join(f"{f:g} Hz {percent(d)}" for f, d in devs), f"within {band:.0%}",
                         all(abs(d) <= band for _, d in devs)))
     forbidden = [c for c in out if any(c.startswith(k) for k in FORBIDDEN_OUT)]
