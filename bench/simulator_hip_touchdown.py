@@ -1,0 +1,93 @@
+"""What sets the hip's initial stiffness in seed Fig. 7 (issue 17, session 23): the hip moment at touchdown per stance.
+
+Seed Fig. 7 plots the mean maximal against the mean initial stiffness (K at touchdown, the fitted k0) of each joint
+and frequency. Under the energy-keeping flight the 1.53 Hz hip point has an initial K near 0 (bench/simulator_fig7.py
+--simulate), so this bench prints, for one noise-free 10-hop trial of the variant given by bench/simulator_issue17.py's
+flags, per stance after the first:
+
+- the analysis' per-stance fit of the seed's k0, k1, b0 (``fit_calibration.seed_model_fits``) at the hip, its initial
+  and maximal K (the Fig. 7 point's inputs), and at ankle and knee for comparison;
+- the analysis' hip moment at touchdown and 20 ms later (inverse dynamics from markers and plate);
+- the simulator's own hip moment at touchdown and the trunk balance's part of it (truth file samples), and the hip
+  rate there.
+
+Usage::
+
+    .venv/bin/python bench/simulator_hip_touchdown.py --hopper seed-like --surface rigid [--freq 1.53]
+    .venv/bin/python bench/simulator_hip_touchdown.py --hopper seed-like --surface rigid --flight energy_keeping \\
+        --landing prescribed --push-weights 1,-0.1,0.3 --push-off-gain 0.5 --law-scale-file LAW.json
+
+About 30 s a trial on this machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import simulator_issue17 as s17  # noqa: E402  (a bench next to this one)
+
+from hop_impedance.biomech.analysis import analyze_recording  # noqa: E402
+from hop_impedance.simulation.fit_calibration import seed_model_fits  # noqa: E402
+from hop_impedance.simulation.sensors import SensorConfig, noise_free  # noqa: E402
+from hop_impedance.simulation.simulate import simulate_recording  # noqa: E402
+
+JOINTS = ("ankle", "knee", "hip")
+
+
+def fit_lines(analysis) -> list[str]:
+    """Per stance after the first: k0, k1, b0, initial and maximal K of the seed model's fit, every joint."""
+    lines = []
+    for i, fits in enumerate(seed_model_fits(analysis)):
+        cells = []
+        for j in JOINTS:
+            c = fits[j].coefficients
+            cells.append(f"{j} k0 {c['k0']:5.0f} k1 {c['k1']:6.0f} b0 {c['b0']:5.1f} K {fits[j].initial_stiffness:4.0f}"
+                         f" -> {fits[j].max_stiffness:4.0f}")
+        lines.append(f"stance {i + 2}: " + " | ".join(cells))
+    return lines
+
+
+def moment_lines(analysis, truth: dict) -> list[str]:
+    """Per stance after the first: the analysis' hip moment at touchdown and +20 ms, the simulator's and its balance part."""
+    lines = []
+    measured = [s for s in analysis.stances if s.complete and s.joints is not None][1:]
+    for i, s in enumerate(measured):
+        m = s.joints.moment_nm[:, 2]
+        k = int(np.searchsorted(s.joints.time_s, 0.02))
+        lines.append(f"stance {i + 2} (analysis): hip moment at touchdown {m[0]:6.1f} N m, +20 ms {m[k]:6.1f}, "
+                     f"maximal {m.max():5.1f}; hip rate at touchdown {s.joints.angular_velocity_rad_s[0, 2]:+.2f} rad/s")
+    for st in truth["stances"][1:]:
+        sm = st["samples"]
+        m, balance = np.asarray(sm["moments_nm"], float), np.asarray(sm["trunk_balance_moments_nm"], float)
+        lines.append(f"stance {st['index'] + 1} (simulator): hip moment at touchdown {m[0, 2]:6.1f} N m, of it the trunk "
+                     f"balance {balance[0, 2]:6.1f}; hip rate {np.asarray(sm['omega_rad_s'], float)[0, 2]:+.2f} rad/s")
+    return lines
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    s17.add_variant_arguments(parser)
+    parser.add_argument("--freq", type=float, default=1.53, help="the trial's target frequency (Hz; default 1.53)")
+    parser.add_argument("--seed", type=int, default=1, help="the trial's seed (default 1)")
+    parser.set_defaults(seed001_keep_pad=False)  # variant_options' --pad line reads it
+    args = parser.parse_args()
+    t0 = time.perf_counter()
+    options, said = s17.variant_options(args)
+    print(f"{said}; {args.freq:g} Hz, seed {args.seed}, noise-free 10 hops")
+    rec, truth = simulate_recording(args.freq, args.surface, 10, seed=args.seed, sensors=noise_free(SensorConfig()),
+                                    **options)
+    analysis = analyze_recording(rec)
+    print("\n".join(fit_lines(analysis) + moment_lines(analysis, truth)))
+    print(f"stopped: {truth['stop_reason']}" if truth["stop_reason"] else "all hops made")
+    print(f"({time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
