@@ -7,25 +7,15 @@ r^2 0.895, under issue 17's 0.9 (the seed's Fig. 7 reports 0.95 for its measured
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from hop_impedance.simulation.scenarios import SEED_TABLE2
-
-BENCH = Path(__file__).resolve().parents[2] / "bench"
+from test.bench_import import bench_module
 
 
 def bench_modules():
-    sys.path.insert(0, str(BENCH))
-    try:
-        import simulator_fig7
-        from simulator_realism import SEED_TABLE1
-    finally:
-        sys.path.pop(0)
-    return simulator_fig7, SEED_TABLE1
+    return bench_module("simulator_fig7"), bench_module("simulator_realism").SEED_TABLE1
 
 
 def test_table2_law_through_table1_ranges_misses_r2_09():

@@ -3,23 +3,15 @@ their bands, and "at most 3 out, none of them stance time, peak GRF or the ankle
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-BENCH = Path(__file__).resolve().parents[2] / "bench"
+from test.bench_import import bench_module
 
 
 @pytest.fixture(scope="module")
 def issue17():
-    sys.path.insert(0, str(BENCH))
-    try:
-        import simulator_issue17
-    finally:
-        sys.path.remove(str(BENCH))
-    return simulator_issue17
+    return bench_module("simulator_issue17")
 
 
 def measures(issue17, factors: dict) -> dict:

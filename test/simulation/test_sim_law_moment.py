@@ -9,23 +9,14 @@ alone. ``law_moment_cause`` names that cause only when the simulated moment foll
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
 from hop_impedance.simulation.scenarios import SEED_TABLE2
-
-BENCH = Path(__file__).resolve().parents[2] / "bench"
+from test.bench_import import bench_module
 
 
 def realism():
-    sys.path.insert(0, str(BENCH))
-    try:
-        import simulator_realism
-    finally:
-        sys.path.pop(0)
-    return simulator_realism
+    return bench_module("simulator_realism")
 
 
 def test_hip_law_moment_matches_the_issue_figures():
