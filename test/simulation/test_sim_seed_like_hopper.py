@@ -9,8 +9,6 @@ bench/simulator_issue17.py's variant flags built (``--bell 0.9 --surface rigid -
 from __future__ import annotations
 
 import argparse
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,8 +18,7 @@ from hop_impedance.cli.main import main
 from hop_impedance.seed_tables import TABLE2_EQ10
 from hop_impedance.simulation import scenarios
 from hop_impedance.simulation.truth import load_truth, truth_path
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+from test.bench_import import bench_module
 
 #: Table 2 at 2.2 Hz, k0 and k1 per joint (N m/rad).
 TABLE2_22 = {j: (TABLE2_EQ10[2.20][j].k0, TABLE2_EQ10[2.20][j].k1) for j in ("ankle", "knee", "hip")}
@@ -38,7 +35,7 @@ def test_the_command_line_offers_the_package_hoppers():
 
 def test_the_bench_variant_flags_build_the_preset():
     """bench/simulator_issue17.py's session-12 flags and its ``--hopper seed-like`` give the preset's options (one place)."""
-    import simulator_issue17 as s17
+    s17 = bench_module("simulator_issue17")
 
     parser = argparse.ArgumentParser()
     s17.add_variant_arguments(parser)
@@ -53,8 +50,7 @@ def test_a_law_file_and_the_search_rebuild_the_preset(tmp_path):
     """Session 16: ``simulator_issue17.py --law-scale-file`` reads back what ``simulator_issue17_search.py --save`` writes
     (the preset's law through JSON gives the preset's options), and the search's options for ``--hopper seed-like
     --a-min 0.9 --push-weights 1,-0.2,0.3`` are the preset's with those shares (the law is what the search replaces)."""
-    import simulator_issue17 as s17
-    import simulator_issue17_search as search
+    s17, search = bench_module("simulator_issue17"), bench_module("simulator_issue17_search")
 
     law_file = tmp_path / "law.json"
     s17.write_law_scale(law_file, scenarios.SEED_LIKE_HOPPER_LAW_SCALE)

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -19,6 +16,7 @@ from hop_impedance.simulation.surface_surprise import (
     seed001_options,
     unexpected_hard_vs_soft,
 )
+from test.bench_import import bench_module
 
 
 @pytest.mark.parametrize("k1", [False, True])
@@ -62,12 +60,8 @@ def test_seed_001_laws_are_met_without_the_shoe_pad():
     n 3 pad, bell a_min 0.9, its calibrated law) the 2.2 Hz hop on the bare soft law exists and leg stiffness falls
     on the unexpected hard surface (measured -4.3 %, 19.7 -> 18.9 kN/m), while the pad in series with the soft law
     (keep_pad, session 11) has no periodic 2.2 Hz hop (closest: 424 ms stance, 42 ms flight)."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
-    try:
-        from simulator_issue17 import LAW_SCALES
-    finally:
-        sys.path.pop(0)
-    options = {**seed_like_options(), "bell_activation_min": 0.9, "law_scale": LAW_SCALES["bell09_rigid_pad15_3"],
+    law_scales = bench_module("simulator_issue17").LAW_SCALES
+    options = {**seed_like_options(), "bell_activation_min": 0.9, "law_scale": law_scales["bell09_rigid_pad15_3"],
                "pad": shoe_pad(0.015, 3.0)}
     assert "pad" not in seed001_options(options) and seed001_options(options, keep_pad=True)["pad"] is options["pad"]
     legacy = {"anticipate": False, "preprogrammed": False}
