@@ -45,9 +45,9 @@ seed 000's Eq. 7, K >= 0 and B >= 0 on the training samples; session 16's option
 corrected on the stance's first W s of joint angles; session 17's option, off by default); ``--gate-per-signal`` /
 ``--no-gate-per-signal``: ``stiffness_gate.GATE_PER_SIGNAL`` (session 17; on by default since its end); ``--energy-pairs``:
 ``forward_selection.ENERGY_PAIRS`` (session 19's option: a loss and the push-off replacing it tried together when no
-single candidate passes); ``--velocity-fit-shared`` / ``--accept-step``: ``forward_selection.VELOCITY_FIT_SHARED`` /
-``VELOCITY_FIT_ACCEPT`` (session 20's sub-options of the velocity fit: one fitted state per stance for every model;
-the step checked); ``--simulate-from D``: ``forward_selection.SIMULATE_FROM_S`` (session 22's option: every held-out
+single candidate passes); ``--accept-step``: ``forward_selection.VELOCITY_FIT_ACCEPT`` (session 20's sub-option of
+the velocity fit: the step checked; its ``--velocity-fit-shared``, not adopted, was removed in session 23 and runs at
+commit a93ac09); ``--simulate-from D``: ``forward_selection.SIMULATE_FROM_S`` (session 22's option: every held-out
 stance simulated from the measured state D s after its touchdown, compared from there); set in this
 process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
@@ -176,9 +176,6 @@ def main() -> None:
     ap.add_argument("--energy-pairs", action="store_true",
                     help="forward_selection.ENERGY_PAIRS = True (session 19's option): when no single candidate passes, "
                          "a loss and the push-off that replaces it tried together")
-    ap.add_argument("--velocity-fit-shared", action="store_true",
-                    help="forward_selection.VELOCITY_FIT_SHARED = True (session 20): every model simulated from the "
-                         "velocities fitted once per stance under its reference law")
     ap.add_argument("--accept-step", action="store_true",
                     help="forward_selection.VELOCITY_FIT_ACCEPT = True (session 20): the velocity step checked")
     ap.add_argument("--gate-per-signal", action="store_true",
@@ -229,7 +226,6 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--simulate-from", forward_selection, "SIMULATE_FROM_S", args.simulate_from),
             ("--angle-terms", model, "ANGLE_TERMS", tuple(args.angle_terms.split(",")) if args.angle_terms else None),
             ("--energy-pairs", forward_selection, "ENERGY_PAIRS", True if args.energy_pairs else None),
-            ("--velocity-fit-shared", forward_selection, "VELOCITY_FIT_SHARED", True if args.velocity_fit_shared else None),
             ("--accept-step", forward_selection, "VELOCITY_FIT_ACCEPT", True if args.accept_step else None),
             ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
             ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None)):

@@ -14,20 +14,17 @@ held-out gap was 2.96 against 0.92, from three stances that take off far too ear
 ``--discover``: also ``discover`` on the recording with and without the fit, printing the effects named, every
 round's held-out screen (p, pooled shrink) and the stiffness gate's p.
 
-``--accept-step`` / ``--own-ground-jacobian`` (session 20): the fit's sub-options
-``forward_selection.VELOCITY_FIT_ACCEPT`` / ``VELOCITY_JACOBIAN_OWN_GROUND`` on the runs with the fit;
-``--shared`` ``VELOCITY_FIT_SHARED`` (one fitted state per stance for every model).
-
-``--paired candidate|current`` (session 21): ``forward_selection.PAIRED_VELOCITY_STATE`` (one state per pairwise
-comparison, fitted under the candidate's or the current model's law; acts in ``discover``'s comparisons only, so the
-per-stance table is the per-model fit's). ``--fit-only``: skip the runs without the fit (the default's, known).
+``--accept-step`` (session 20): the fit's sub-option ``forward_selection.VELOCITY_FIT_ACCEPT`` on the runs with the
+fit. (Session 20's ``--own-ground-jacobian`` / ``--shared`` and session 21's ``--paired candidate|current``, the
+sub-options measured and not adopted, were removed in session 23; they run at commit a93ac09.)
+``--fit-only``: skip the runs without the fit (the default's, known).
 
 ``--simulate-from D`` (session 22): ``forward_selection.SIMULATE_FROM_S`` = D instead of the fit in the runs "with"
 (every held-out stance simulated from the measured state D s after its touchdown and compared from there; the fit
 column then reads ``from D``).
 
 Usage: .venv/bin/python bench/discovery_stance_terms.py REC.mcap [--touchdown-velocity-fit 0.06] [--stances 5,6,8]
-       [--discover] [--accept-step] [--own-ground-jacobian] [--shared] [--paired candidate|current] [--fit-only]
+       [--discover] [--accept-step] [--fit-only]
        [--simulate-from 0.06]
 """
 
@@ -50,19 +47,11 @@ def main() -> None:
     ap.add_argument("--stances", default="", help="positions in the measured trial, e.g. 5,6,8 (default: all)")
     ap.add_argument("--discover", action="store_true", help="also discover with and without the fit")
     ap.add_argument("--accept-step", action="store_true", help="forward_selection.VELOCITY_FIT_ACCEPT")
-    ap.add_argument("--own-ground-jacobian", action="store_true",
-                    help="forward_selection.VELOCITY_JACOBIAN_OWN_GROUND")
-    ap.add_argument("--shared", action="store_true", help="forward_selection.VELOCITY_FIT_SHARED")
-    ap.add_argument("--paired", choices=("candidate", "current"), default=None,
-                    help="forward_selection.PAIRED_VELOCITY_STATE")
     ap.add_argument("--fit-only", action="store_true", help="only the runs with the fit")
     ap.add_argument("--simulate-from", type=float, default=None, metavar="D",
                     help="forward_selection.SIMULATE_FROM_S = D instead of the fit (session 22)")
     args = ap.parse_args()
-    fs.PAIRED_VELOCITY_STATE = args.paired
-    fs.VELOCITY_FIT_SHARED = args.shared
     fs.VELOCITY_FIT_ACCEPT = args.accept_step  # module options: set before any evaluator forks its workers
-    fs.VELOCITY_JACOBIAN_OWN_GROUND = args.own_ground_jacobian
     rec = load_recording(args.recording)
     trial = measure_trial(rec)
     scales = fs.gap_scales(trial)
@@ -105,8 +94,6 @@ def main() -> None:
                       + ", ".join(f"{e} p {v['p_value']:.2g} passes {v['passes']}, shot "
                                   f"{np.mean(v['per_stance_gap_shot']):.3f}"
                                   + _per_signal(v)
-                                  + (f" (current from the same states {np.mean(v['paired_current_per_stance_gap']):.3f})"
-                                     if "paired_current_per_stance_gap" in v else "")
                                   for e, v in g["candidates"].items()))
 
 

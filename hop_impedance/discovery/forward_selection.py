@@ -48,7 +48,7 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -130,7 +130,7 @@ TOUCHDOWN_VELOCITY_FIT_S: float | None = None
 #: than 10x (``bench/discovery_candidate_sets.py two:push+soft 0 ...``). Measured with the touchdown-velocity fit (without
 #: it that stance set fails forward for another reason, docs "Session 17"), so an option beside it.
 ENERGY_PAIRS = False
-#: Session 20 (sub-options of :data:`TOUCHDOWN_VELOCITY_FIT_S`, off; docs/discovery.md "Session 20"). Accept the
+#: Session 20 (a sub-option of :data:`TOUCHDOWN_VELOCITY_FIT_S`, off; docs/discovery.md "Session 20"). Accept the
 #: velocity step only where the window's simulation from it has a smaller residual than from the measured state AND
 #: is still on the ground at the window's end (unless the measured state's run is not either), halving it up to
 #: :data:`VELOCITY_FIT_HALVINGS` times, else the measured state. Why: on the bundled 2.2 Hz trial three stances of the
@@ -140,24 +140,6 @@ ENERGY_PAIRS = False
 #: ``bench/discovery_stance_terms.py recordings/sim_2p20hz_hard.mcap --accept-step``).
 VELOCITY_FIT_ACCEPT = False
 VELOCITY_FIT_HALVINGS = 2
-#: The reference Jacobian on the simulated model's own ground (its identified surface law) instead of the rigid one,
-#: so that the toe's vertical velocity acts on the window as that model's ground makes it act. Measured with
-#: :data:`VELOCITY_FIT_ACCEPT` on the bundled 2.2 Hz trial: changes no decision (docs "Session 20").
-VELOCITY_JACOBIAN_OWN_GROUND = False
-#: Every model simulated from the same fitted velocities: the step under the stance's reference law
-#: (:func:`shared_velocity_change`) instead of each model's own. Why (session 20): per model, the fitted state lets
-#: a model that misses an effect absorb it (the bundled 2.2 Hz trial's rigid baseline, shot through the simulation,
-#: reaches the shot surface's gap); shared, the state's freedom is the same for every model.
-VELOCITY_FIT_SHARED = False
-#: Session 21 (a sub-option of :data:`TOUCHDOWN_VELOCITY_FIT_S`, off; docs/discovery.md "Session 21"): one touchdown
-#: state per pairwise comparison. Where a candidate is judged against the current model (the held-out screen,
-#: :func:`score`, and the stiffness gate, ``workflow._gated``), each held-out stance's velocities are fitted once, under
-#: the law the candidate (``"candidate"``) or the current model (``"current"``) held that stance out with, and both
-#: models are simulated from that one state (:func:`paired`). Why (session 20): fitted per model, the state lets a
-#: model that misses an effect absorb it (the bundled 2.2 Hz trial's rigid baseline); shared under the stance's
-#: reference law, it is only as right as that law (1201). Here neither side of a comparison gets a state of its own,
-#: and the state is one of the two laws compared. None: each model from its own state (:func:`touchdown_for_gap`).
-PAIRED_VELOCITY_STATE: str | None = None
 #: Session 22 (an option, off; docs/discovery.md "Session 22"): every held-out stance simulated from the measured
 #: (low-passed) state at the first plate sample this many seconds after its touchdown, not from the touchdown state,
 #: and compared from there on (:func:`late_start`, :func:`_gap_of`). Why: our simulator lands its segments at rest and
@@ -208,8 +190,6 @@ class HeldOutRuns:
         CPU-side wall time spent on this model's runs (s).
     surface_factors : list of dict or None
         With :data:`SURFACE_FOLDS`: per fold the held-out stances and the shot surface's factors on ``k, n, d``.
-    models : list or None
-        Per stance the model it was simulated with (:func:`paired` re-simulates them).
     """
 
     effect: str | None
@@ -221,8 +201,6 @@ class HeldOutRuns:
     end_reasons: list
     seconds: float = 0.0
     surface_factors: list | None = None
-    #: Per stance the ``(spec, coefficients)`` it was held out with (:func:`paired`; None where the stance was lost).
-    models: list | None = None
 
     def figures(self, scales: np.ndarray) -> dict:
         """Pooled held-out gap: ``total`` (mean G_i, first key) then per-signal RMS (and RMS / scale) and duration."""
@@ -291,27 +269,20 @@ def _stance_by_index(trial: MeasuredTrial, index: int) -> MeasuredStance | None:
 
 
 def simulate_held_out(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, s: MeasuredStance,
-                      scales: np.ndarray, samples: bool = False, touchdown: TouchdownState | None = None) -> dict:
-    """Forward-simulate stance ``s`` with the identified model; gap figures of that stance, and ``model``, the
-    ``(spec, coefs)`` simulated.
+                      scales: np.ndarray, samples: bool = False) -> dict:
+    """Forward-simulate stance ``s`` with the identified model; gap figures of that stance.
 
     ``samples``: also its scaled residuals (:func:`_gap_of`), for a least-squares search over parameters.
-    ``touchdown``: the state to start from (:func:`paired`; default :func:`touchdown_for_gap`'s).
     """
-    law = held_out_law(spec, coefs, s)
+    coefs = per_stance_push_off(spec, coefs, s)
+    law = FittedLaw(spec, np.asarray(coefs, float), touchdown_moments(spec, coefs, s), identification_reference(s))
     try:
-        sim = simulate_for_gap(trial.chain, law, ground_of(spec, s), s, touchdown, spec.offset_n)
+        sim = simulate_for_gap(trial.chain, law, ground_of(spec, s), s, spec.offset_n)
     except RuntimeError as exc:
-        return {**lost_stance(f"failed: {exc}"), "model": (spec, coefs)}
+        return lost_stance(f"failed: {exc}")
     # the detector's level is read only by the two-sided term: not worked out for every simulated stance otherwise
     level = take_off_level_n(trial) if TWO_SIDED_DURATION else np.nan
-    return {**_gap_of(sim, s, spec.offset_n, scales, level, samples), "model": (spec, coefs)}
-
-
-def held_out_law(spec: ModelSpec, coefs: np.ndarray, s: MeasuredStance) -> FittedLaw:
-    """The identified model's law for stance ``s``: its push-off amplitude and ``M_td`` estimated on ``s``."""
-    coefs = per_stance_push_off(spec, coefs, s)
-    return FittedLaw(spec, np.asarray(coefs, float), touchdown_moments(spec, coefs, s), identification_reference(s))
+    return _gap_of(sim, s, spec.offset_n, scales, level, samples)
 
 
 def lost_stance(reason: str) -> dict:
@@ -327,11 +298,10 @@ def identification_reference(s: MeasuredStance) -> TouchdownReference:
     return TouchdownReference(np.asarray(s.rho_rad[0], float), np.asarray(s.omega_rad_s[0], float))
 
 
-def simulate_for_gap(chain, law, ground, s: MeasuredStance, touchdown: TouchdownState | None = None,
-                     offset_n: float = 0.0):
-    """Stance ``s`` simulated from its touchdown state (``touchdown``, else :func:`touchdown_for_gap`'s), sampled at
-    its measured times and on past them. With :data:`SIMULATE_FROM_S` (and no ``touchdown`` given) from the measured
-    state after the impact instead (:func:`late_start`; ``offset_n``: the model's plate offset), sampled from there.
+def simulate_for_gap(chain, law, ground, s: MeasuredStance, offset_n: float = 0.0):
+    """Stance ``s`` simulated from its touchdown state (:func:`touchdown_for_gap`'s), sampled at its measured times
+    and on past them. With :data:`SIMULATE_FROM_S` from the measured state after the impact instead
+    (:func:`late_start`; ``offset_n``: the model's plate offset), sampled from there.
 
     With :data:`TWO_SIDED_DURATION` the samples go on at the plate's interval up to the longest stance integrated (1.5
     times the measured one plus 50 ms; the simulation stops at its own take-off), so :func:`simulated_take_off_s` can
@@ -341,13 +311,12 @@ def simulate_for_gap(chain, law, ground, s: MeasuredStance, touchdown: Touchdown
     t_max = 1.5 * float(s.t_s[-1]) + 0.05
     dt = float(np.median(np.diff(s.t_s)))
     tail = s.t_s[-1] + dt * np.arange(1, int(np.ceil((t_max - s.t_s[-1]) / dt)) + 1) if TWO_SIDED_DURATION else []
-    if SIMULATE_FROM_S is not None and touchdown is None:
+    if SIMULATE_FROM_S is not None:
         return simulate_stance(chain, law, ground, s.touchdown, t_max_s=t_max, rtol=RTOL, atol=ATOL,
                                sample_times_s=np.r_[s.t_s[start_index(s):], tail],
                                start=late_start(chain, law, ground, s, offset_n))
-    start = touchdown_for_gap(chain, law, ground, s) if touchdown is None else touchdown
-    return simulate_stance(chain, law, ground, start, t_max_s=t_max, rtol=RTOL, atol=ATOL,
-                           sample_times_s=np.r_[s.t_s, tail])
+    return simulate_stance(chain, law, ground, touchdown_for_gap(chain, law, ground, s), t_max_s=t_max, rtol=RTOL,
+                           atol=ATOL, sample_times_s=np.r_[s.t_s, tail])
 
 
 def start_index(s: MeasuredStance) -> int:
@@ -400,21 +369,7 @@ def touchdown_for_gap(chain, law, ground, s: MeasuredStance) -> TouchdownState:
     :data:`VELOCITY_FIT_ACCEPT`'s check of the step)."""
     if TOUCHDOWN_VELOCITY_FIT_S is None:
         return s.touchdown
-    return _with_velocity_change(s, velocity_change(chain, law, ground, s))
-
-
-def velocity_change(chain, law, ground, s: MeasuredStance) -> np.ndarray:
-    """The fitted change of stance ``s``'s touchdown velocities for ``law`` on ``ground`` (in :data:`VELOCITY_SCALE`
-    units): :func:`shared_velocity_change` with :data:`VELOCITY_FIT_SHARED`, else ``law``'s own step."""
-    if VELOCITY_FIT_SHARED:
-        return shared_velocity_change(chain, s)
-    jac = reference_velocity_jacobian(chain, s, ground if VELOCITY_JACOBIAN_OWN_GROUND else None)
-    return _velocity_step(chain, law, ground, s, jac)
-
-
-def _velocity_step(chain, law, ground, s: MeasuredStance, jac: np.ndarray) -> np.ndarray:
-    """One Gauss-Newton step of the velocity change for ``law`` on ``ground`` (checked with
-    :data:`VELOCITY_FIT_ACCEPT`)."""
+    jac = reference_velocity_jacobian(chain, s)
     r0, reached0 = velocity_window_run(chain, law, ground, s, np.zeros(5))
     d = -np.linalg.lstsq(jac, r0, rcond=None)[0]
     if VELOCITY_FIT_ACCEPT:
@@ -425,26 +380,7 @@ def _velocity_step(chain, law, ground, s: MeasuredStance, jac: np.ndarray) -> np
             d = 0.5 * d
         else:
             d = np.zeros(5)
-    return d
-
-
-def shared_velocity_change(chain, s: MeasuredStance) -> np.ndarray:
-    """:data:`VELOCITY_FIT_SHARED`'s change: the step under the stance's reference law
-    (:func:`reference_velocity_law`), the same for every model; kept on the stance per body and window."""
-    key = (chain_key(chain), TOUCHDOWN_VELOCITY_FIT_S, VELOCITY_FIT_ACCEPT)
-    cache = s.__dict__.setdefault("_shared_velocity_changes", {})
-    if key not in cache:
-        law, ground = reference_velocity_law(s)
-        cache[key] = _velocity_step(chain, law, ground, s, reference_velocity_jacobian(chain, s))
-    return cache[key]
-
-
-def reference_velocity_law(s: MeasuredStance):
-    """The stance's reference law and ground: constant stiffness with its k0 from this stance alone and ``M_td``
-    estimated, on the rigid ground."""
-    coefs, _ = fit_joint_law(ModelSpec(), [s])
-    law = FittedLaw(ModelSpec(), coefs, touchdown_moments(ModelSpec(), coefs, s), identification_reference(s))
-    return law, ground_of(ModelSpec(), s)
+    return _with_velocity_change(s, d)
 
 
 def _with_velocity_change(s: MeasuredStance, d: np.ndarray) -> TouchdownState:
@@ -480,16 +416,16 @@ def velocity_window_run(chain, law, ground, s: MeasuredStance, d: np.ndarray) ->
     return residual, n == tw.size
 
 
-def reference_velocity_jacobian(chain, s: MeasuredStance, ground=None, step: float = 1e-2) -> np.ndarray:
+def reference_velocity_jacobian(chain, s: MeasuredStance, step: float = 1e-2) -> np.ndarray:
     """Jacobian of :func:`velocity_window_residual` at 0 under the stance's own reference law: constant stiffness with
-    its k0 from this stance alone and ``M_td`` estimated, on the rigid ground (or on ``ground``,
-    :data:`VELOCITY_JACOBIAN_OWN_GROUND`). A property of the measured stance and the body (and that ground), so the
-    same for every model on it; kept on the stance per body, window and ground."""
-    key = (chain_key(chain), TOUCHDOWN_VELOCITY_FIT_S, repr(ground))
+    its k0 from this stance alone and ``M_td`` estimated, on the rigid ground. A property of the measured stance and
+    the body, so the same for every model; kept on the stance per body and window."""
+    key = (chain_key(chain), TOUCHDOWN_VELOCITY_FIT_S)
     cache = s.__dict__.setdefault("_velocity_jacobians", {})
     if key not in cache:
-        law, rigid = reference_velocity_law(s)
-        ground = rigid if ground is None else ground
+        coefs, _ = fit_joint_law(ModelSpec(), [s])
+        law = FittedLaw(ModelSpec(), coefs, touchdown_moments(ModelSpec(), coefs, s), identification_reference(s))
+        ground = ground_of(ModelSpec(), s)
         r0 = velocity_window_residual(chain, law, ground, s, np.zeros(5))
         cache[key] = np.column_stack([(velocity_window_residual(chain, law, ground, s, step * e) - r0) / step
                                       for e in np.eye(5)])
@@ -610,22 +546,6 @@ def _figures_one(task: tuple) -> dict:
     return simulate_held_out(spec, coefs, trial, s, _CONTEXT["scales"])
 
 
-def _paired_one(task: tuple) -> list[dict]:
-    """Stance ``index`` simulated with both models of one comparison (``(current, candidate)``, each ``(spec,
-    coefs)``) from one state: the velocity change fitted under the model :data:`PAIRED_VELOCITY_STATE` names, applied
-    to each model's own measurement of the stance (a latency or body split re-measures it)."""
-    models, index = task
-    found = [None if m is None else _stance_by_index(trial_for(m[0]), index) for m in models]
-    stances = [s for s in found if s is not None]
-    if len(stances) < 2:
-        return [lost_stance("stance lost when re-measured")] * 2
-    k = 1 if PAIRED_VELOCITY_STATE == "candidate" else 0
-    (spec, coefs), s = models[k], stances[k]
-    d = velocity_change(trial_for(spec).chain, held_out_law(spec, coefs, s), ground_of(spec, s), s)
-    return [simulate_held_out(sp, c, trial_for(sp), st, _CONTEXT["scales"], True, _with_velocity_change(st, d))
-            for (sp, c), st in zip(models, stances)]
-
-
 class HeldOutEvaluator:
     """Runs leave-one-stance-out forward simulations of models on one recording, on all cores.
 
@@ -681,12 +601,6 @@ class HeldOutEvaluator:
         tasks = [(spec, coefs, i) for i in indices]
         return list(self._pool.map(_figures_one, tasks)) if self._pool else [_figures_one(t) for t in tasks]
 
-    def paired_runs(self, current: list, cand: list) -> list[list[dict]]:
-        """Per stance (the evaluator's order) the runs of the two models of a comparison from one state
-        (:func:`_paired_one`; ``current`` / ``cand``: per stance the ``(spec, coefs)`` each held it out with)."""
-        tasks = [((a, b), s.index) for a, b, s in zip(current, cand, self.trial.stances)]
-        return list(self._pool.map(_paired_one, tasks)) if self._pool else [_paired_one(t) for t in tasks]
-
     def run(self, spec: ModelSpec, effects: list) -> list[HeldOutRuns]:
         """Held-out runs of ``spec`` with each of ``effects`` added (None = ``spec`` itself); leave-one-out, or with
         :data:`SURFACE_FOLDS` and the surface in ``spec`` on folds with each model's surface shot."""
@@ -710,7 +624,7 @@ class HeldOutEvaluator:
                 effect=e, spec=fitted, gaps=np.array([r["gap"] for r in rs]), rms=np.array([r["rms"] for r in rs]),
                 duration_error_s=np.array([r["duration_error_s"] for r in rs]),
                 net_work_j=np.array([r["net_work_j"] for r in rs]), end_reasons=[r["end_reason"] for r in rs],
-                seconds=wall / len(effects), models=[r.get("model") for r in rs]))
+                seconds=wall / len(effects)))
         return out
 
 
@@ -831,52 +745,18 @@ def significant(p_value: float, shrink: float, n_candidates: int) -> bool:
     return p_value < ALPHA / max(n_candidates, 1) and shrink >= MIN_SHRINK
 
 
-def score(trial: MeasuredTrial, current: HeldOutRuns, cands: list[HeldOutRuns],
-          ev: HeldOutEvaluator | None = None) -> list[ForwardScore]:
-    """Compare every candidate's held-out forward runs with the current model's (module docstring); with ``ev`` and
-    :data:`PAIRED_VELOCITY_STATE` both sides of each comparison from one state per stance (:func:`paired`; the
-    score keeps the candidate's own runs)."""
+def score(trial: MeasuredTrial, current: HeldOutRuns, cands: list[HeldOutRuns]) -> list[ForwardScore]:
+    """Compare every candidate's held-out forward runs with the current model's (module docstring)."""
     out = []
     for c in cands:
-        cur, cand = paired(ev, current, c)
-        d, shrink, p = compare_gaps(cur.gaps, cand.gaps)
+        d, shrink, p = compare_gaps(current.gaps, c.gaps)
         assert c.effect is not None  # a candidate adds an effect (remaining(spec)); None is the current model
-        phys = physics_evidence(trial, cur, cand)
+        phys = physics_evidence(trial, current, c)
         ok, why = admissible(c.effect, phys)
         phys["admissible"], phys["inadmissible_because"] = ok, why or None
         out.append(ForwardScore(c.effect, c, d, float(np.mean(np.clip(np.nan_to_num(d, nan=0.0), -10, 10))),
                                 shrink, p, ok, phys))
     return out
-
-
-def paired(ev: HeldOutEvaluator | None, current, cand):
-    """The two sides of one comparison, ``(current, candidate)``: :class:`HeldOutRuns` (the screen) or the stiffness
-    gate's ``HeldOutShot`` s. As they are, or with :data:`PAIRED_VELOCITY_STATE` (and the velocity fit, and an
-    evaluator) copies whose per-stance figures are re-simulated: each held-out stance with the two models it was held
-    out with, both from the one state fitted under the model the option names (:meth:`HeldOutEvaluator.paired_runs`)."""
-    if PAIRED_VELOCITY_STATE is None or TOUCHDOWN_VELOCITY_FIT_S is None or ev is None:
-        return current, cand
-    assert PAIRED_VELOCITY_STATE in ("candidate", "current"), PAIRED_VELOCITY_STATE
-    assert current.models is not None and cand.models is not None, "paired runs need the models each side held out"
-    runs = ev.paired_runs(current.models, cand.models)
-    out = []
-    for k, side in enumerate((current, cand)):
-        rs = [r[k] for r in runs]
-        gaps = np.array([r["gap"] for r in rs])
-        if isinstance(side, HeldOutRuns):
-            out.append(replace(side, gaps=gaps, rms=np.array([r["rms"] for r in rs]),
-                               duration_error_s=np.array([r["duration_error_s"] for r in rs]),
-                               net_work_j=np.array([r["net_work_j"] for r in rs]),
-                               end_reasons=[r["end_reason"] for r in rs]))
-        else:
-            out.append(replace(side, gaps=gaps, signal_errors=signal_errors(rs)))
-    return out[0], out[1]
-
-
-def signal_errors(runs: list[dict]) -> np.ndarray:
-    """(n, len(GAP_SIGNALS)): per run the mean squared scaled residual of each sampled signal (NaN: failed)."""
-    return np.array([np.full(len(GAP_SIGNALS), np.nan) if r["samples"] is None else np.mean(r["samples"] ** 2, axis=0)
-                     for r in runs])
 
 
 #: Effects whose physics evidence is the measured net joint work (:func:`admissible`).

@@ -223,8 +223,6 @@ class HeldOutShot:
     #: (n, N_SIGNALS): each stance's mean squared scaled residual per sampled signal, with the shot parameters of the
     #: fold that held it out (NaN where it failed to simulate); what :data:`GATE_PER_SIGNAL` tests.
     signal_errors: np.ndarray = field(default_factory=lambda: np.zeros((0, N_SIGNALS)))
-    #: Per stance the ``(spec, coefficients)`` it was judged with (its fold's shot parameters; ``fs.paired``).
-    models: tuple = ()
 
     @property
     def evaluations(self) -> int:
@@ -282,13 +280,13 @@ def shoot_held_out(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, start: HeldOutS
     order = [s.index for s in ev.trial.stances]
     split = fold_indices(order, folds or FOLDS)
 
-    def one(f: int) -> tuple[ShotStiffness, _Point, _Point, np.ndarray]:
+    def one(f: int) -> tuple[ShotStiffness, _Point, _Point]:
         train, test = split[f]
         _, coefs = identify(spec_fit, trial, [s for s in trial.stances if s.index in train])
         shot = shoot_stiffness(ev, spec_fit, coefs, None if start is None else start.folds[f], method, effect, train)
         search = _Search(ev, spec_fit, coefs, shot.effect_terms, test)
         reg, best = search.points([search.regression(), np.r_[np.log(shot.factors), shot.effect_factors]])
-        return shot, reg, best, search._coefs(best.x)
+        return shot, reg, best
 
     # the folds' searches side by side (threads feeding the one process pool): a fold's map of a few training
     # stances leaves a core idle at its end, two folds' maps fill it
@@ -296,14 +294,11 @@ def shoot_held_out(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, start: HeldOutS
         results = list(threads.map(one, range(len(split))))
     gaps, gaps_reg = np.full(len(order), np.inf), np.full(len(order), np.inf)
     errors = np.full((len(order), N_SIGNALS), np.nan)
-    models: list = [None] * len(order)
-    for (_, test), (_, reg, best, coefs) in zip(split, results):
+    for (_, test), (_, reg, best) in zip(split, results):
         pos = [order.index(i) for i in test]
         gaps[pos], gaps_reg[pos], errors[pos] = best.gaps, reg.gaps, best.signal_errors
-        for k in pos:
-            models[k] = (spec_fit, coefs)
     return HeldOutShot(tuple(r[0] for r in results), tuple(t for _, t in split), gaps, gaps_reg,
-                       time.perf_counter() - t0, errors, tuple(models))
+                       time.perf_counter() - t0, errors)
 
 
 def effect_terms(spec_fit: ModelSpec, effect: str | None) -> tuple[str, ...]:
@@ -336,7 +331,8 @@ class _Point:
     @property
     def signal_errors(self) -> np.ndarray:
         """(n, N_SIGNALS): per stance the mean squared scaled residual of each sampled signal (NaN: failed)."""
-        return fs.signal_errors(self.runs)
+        return np.array([np.full(N_SIGNALS, np.nan) if r["samples"] is None else np.mean(r["samples"] ** 2, axis=0)
+                         for r in self.runs])
 
 
 class _Search:

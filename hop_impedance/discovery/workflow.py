@@ -287,11 +287,7 @@ def _gated(ev: fs.HeldOutEvaluator, fitted: tuple[ModelSpec, np.ndarray], scores
         trial = fs.trial_for(sc.runs.spec)
         cand = identify(sc.runs.spec, trial, trial.stances)
         shots[_model_key(*cand)] = shoot(ev, *cand, shot, effect=sc.effect if sized else None)
-        # both sides from one state per stance with fs.PAIRED_VELOCITY_STATE (else as shot)
-        shot_cur, shot_cand = fs.paired(ev, shot, shots[_model_key(*cand)])
-        gates[sc.effect] = gate(shot_cand, shot_cur, n_candidates)
-        if shot_cur is not shot:
-            gates[sc.effect]["paired_current_per_stance_gap"] = np.round(shot_cur.gaps, 5).tolist()
+        gates[sc.effect] = gate(shots[_model_key(*cand)], shot, n_candidates)
         if gates[sc.effect]["passes"]:
             break
     doc["selection"]["stiffness_through_simulation"].append(
@@ -364,7 +360,7 @@ def _scored_round(ev: fs.HeldOutEvaluator, spec: ModelSpec, trial: MeasuredTrial
     timing["rounds"][-1] += time.perf_counter() - t0
     for r in runs:
         timing["per_candidate_s"].setdefault(r.effect, []).append(r.seconds)
-    return fs.defer_energy_effects(fs.score(trial, current, runs, ev), stiffness_gate.screen_factor(factor or len(cands)))
+    return fs.defer_energy_effects(fs.score(trial, current, runs), stiffness_gate.screen_factor(factor or len(cands)))
 
 
 def _round_json(scores: list[fs.ForwardScore], n_candidates: int, scales: np.ndarray, gates: dict) -> dict:

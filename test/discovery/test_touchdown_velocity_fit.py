@@ -48,18 +48,11 @@ def test_corrected_velocities_make_the_true_law_take_off_on_time_at_1p53_hz(monk
     assert np.sum(np.abs(measured) > 50.0) >= 3
     assert np.sqrt(np.mean(corrected**2)) < 3.0  # 1.3 ms
     assert np.max(np.abs(corrected)) < 5.0
-    # session 20: one state per stance, fitted under its reference law, for every model: the same on time here
-    monkeypatch.setattr(fs, "VELOCITY_FIT_SHARED", True)
-    shared = _take_off_errors_ms(trial, k0)
-    assert np.sqrt(np.mean(shared**2)) < 3.0  # 1.4 ms
-    assert np.max(np.abs(shared)) < 5.0
-    s = trial.stances[2]  # a model with another stiffness starts from the very same state
+    s = trial.stances[2]  # each model its own state: one with another stiffness starts from other velocities
     other = FittedLaw(ModelSpec(), 0.7 * k0, touchdown_moments(ModelSpec(), 0.7 * k0, s), fs.identification_reference(s))
     mine = FittedLaw(ModelSpec(), k0, touchdown_moments(ModelSpec(), k0, s), fs.identification_reference(s))
-    td_other = fs.touchdown_for_gap(trial.chain, other, RIGID_NO_BOUNCE, s)
     td_mine = fs.touchdown_for_gap(trial.chain, mine, RIGID_NO_BOUNCE, s)
-    assert np.array_equal(td_other.gd, td_mine.gd) and not np.array_equal(td_mine.gd, s.touchdown.gd)
-    monkeypatch.setattr(fs, "VELOCITY_FIT_SHARED", False)
+    assert not np.array_equal(td_mine.gd, s.touchdown.gd)
     assert not np.array_equal(fs.touchdown_for_gap(trial.chain, other, RIGID_NO_BOUNCE, s).gd, td_mine.gd)
 
 
@@ -113,39 +106,3 @@ def test_a_velocity_step_that_bounces_the_stance_off_is_not_taken(monkeypatch):
     assert np.max(runs[True].gaps) < 1.0 and np.mean(runs[True].gaps) < 0.7  # 0.80, 0.62
     steps_kept = np.isclose(runs[True].gaps, runs[False].gaps, rtol=1e-9)
     assert np.sum(steps_kept) == 7  # the step is checked, not changed, where it does not bounce
-
-
-def test_a_comparison_simulates_both_models_from_the_one_state_the_option_names(monkeypatch):
-    """Session 21 (:data:`forward_selection.PAIRED_VELOCITY_STATE`, off): a comparison's two models, here the generating
-    law and the same law 30 % softer, each stance fitted once, under the candidate's law or the current model's, and
-    both simulated from that state. The side whose law fitted the state keeps its own run, the other loses the state it
-    would have fitted for itself; the true law, from its own state or the wrong law's, stays at its floor and beats the
-    wrong law in every stance."""
-    rec, _ = simulate_stance_set_recording(2.2, ("rigid",), 5, 3, NULL, SensorConfig())
-    trial = measure_trial(rec)
-    law, _, _ = _stance_set_law(trial.chain, 2.2, NULL, None, RIGID_NO_BOUNCE, DEFAULT_TOUCHDOWN_RHO)
-    k0 = np.array(law.parts[0].k0, float)[:, None]
-    monkeypatch.setattr(fs, "TOUCHDOWN_VELOCITY_FIT_S", 0.06)
-    with fs.HeldOutEvaluator(rec, trial, workers=1) as ev:
-        def own(coefs: np.ndarray) -> fs.HeldOutRuns:  # each stance from the model's own fitted state
-            rs = [fs.simulate_held_out(ModelSpec(), coefs, trial, s, ev.scales) for s in trial.stances]
-            return fs.HeldOutRuns(None, ModelSpec(), np.array([r["gap"] for r in rs]), np.array([r["rms"] for r in rs]),
-                                  np.array([r["duration_error_s"] for r in rs]), np.array([r["net_work_j"] for r in rs]),
-                                  [r["end_reason"] for r in rs], models=[r["model"] for r in rs])
-
-        wrong, true = own(0.7 * k0), own(k0)
-        assert fs.paired(ev, wrong, true) == (wrong, true)  # off: the comparison as it was
-        sides = {}
-        for mode in ("candidate", "current"):
-            monkeypatch.setattr(fs, "PAIRED_VELOCITY_STATE", mode)
-            sides[mode] = fs.paired(ev, wrong, true)  # current: the wrong law; candidate: the true one
-    cur, cand = sides["candidate"]  # the state fitted under the true law
-    np.testing.assert_allclose(cand.gaps, true.gaps, rtol=1e-9)
-    # the wrong law no longer absorbs part of its error into a state of its own: 0.024-0.12 against 0.018-0.082
-    assert np.all(cur.gaps > 1.1 * wrong.gaps), (cur.gaps, wrong.gaps)
-    cur2, cand2 = sides["current"]  # the state fitted under the wrong law
-    np.testing.assert_allclose(cur2.gaps, wrong.gaps, rtol=1e-9)
-    assert not np.allclose(cand2.gaps, true.gaps, rtol=1e-3)
-    for c, w in ((cand, cur), (cand2, cur2)):  # the truth at its floor from either state (G 0.0034-0.0098)
-        assert np.mean(c.gaps) < 0.01 and np.all(c.duration_error_s > -0.008), (c.gaps, c.duration_error_s)
-        assert np.all(c.gaps < w.gaps), (c.gaps, w.gaps)  # 1.8-19x better in every stance
