@@ -23,7 +23,8 @@ sub-options measured and not adopted, were removed in session 23; they run at co
 (every held-out stance simulated from the measured state D s after its touchdown and compared from there; the fit
 column then reads ``from D``). ``--two-segment`` (session 23, with ``--simulate-from``):
 ``forward_selection.TWO_SEGMENT`` too (the touchdown run compared before the start sample, the late run from it; the
-column reads ``2seg D``).
+column reads ``2seg D``); ``--two-segment-flight``: ``forward_selection.TWO_SEGMENT_FLIGHT`` too (a run from the
+touchdown that takes off before the start sample compared as in flight up to it).
 
 Usage: .venv/bin/python bench/discovery_stance_terms.py REC.mcap [--touchdown-velocity-fit 0.06] [--stances 5,6,8]
        [--discover] [--accept-step] [--fit-only]
@@ -54,9 +55,14 @@ def main() -> None:
                     help="forward_selection.SIMULATE_FROM_S = D instead of the fit (session 22)")
     ap.add_argument("--two-segment", action="store_true",
                     help="with --simulate-from: forward_selection.TWO_SEGMENT = True (session 23)")
+    ap.add_argument("--two-segment-flight", action="store_true",
+                    help="with --two-segment: forward_selection.TWO_SEGMENT_FLIGHT = True (session 23)")
     args = ap.parse_args()
     if args.two_segment and args.simulate_from is None:
         ap.error("--two-segment needs --simulate-from")
+    if args.two_segment_flight and not args.two_segment:
+        ap.error("--two-segment-flight needs --two-segment")
+    fs.TWO_SEGMENT_FLIGHT = args.two_segment_flight
     fs.VELOCITY_FIT_ACCEPT = args.accept_step  # module options: set before any evaluator forks its workers
     rec = load_recording(args.recording)
     trial = measure_trial(rec)
@@ -66,7 +72,7 @@ def main() -> None:
     means = {}
     with_fit = f"from {args.simulate_from}" if args.simulate_from is not None else args.touchdown_velocity_fit
     if args.two_segment:
-        with_fit = f"2seg {args.simulate_from}"
+        with_fit = f"2seg{'F' if args.two_segment_flight else ''} {args.simulate_from}"
     windows = (with_fit,) if args.fit_only else (None, with_fit)
 
     def configure(window) -> None:  # before the evaluator forks its workers, which read it

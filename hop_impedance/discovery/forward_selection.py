@@ -166,6 +166,13 @@ SIMULATE_FROM_S: float | None = None
 #: compared; the touchdown run keeps that evidence, the late run keeps the take-off free of the smeared touchdown
 #: velocities. Without :data:`SIMULATE_FROM_S` it does nothing.
 TWO_SEGMENT = False
+#: Session 23 (a sub-option of :data:`TWO_SEGMENT`, off): where the run from the touchdown takes off (or collapses)
+#: before the start sample, the measured samples between are compared with that model in flight (zero force; angles,
+#: rates and moments held at its last sample; no joint work) against the measured ones and the measured work over the
+#: whole stance, instead of not compared. Why: on outside 1201 the constant-stiffness baseline's run from the
+#: touchdown bounces off ~19 ms after it in every stance (the default's strongest evidence for the angle law), and not
+#: comparing those 40 ms leaves the baseline the fewer and easier samples (:class:`TwoSegmentRun`).
+TWO_SEGMENT_FLIGHT = False
 #: A loss and its source: (loss, source), identified in that order.
 PAIRS: tuple[tuple[str, str], ...] = (("surface_compliance", "active_push_off"), ("joint_damping", "active_push_off"))
 #: Scale of the fitted change of (toe vz m/s, q1..q4 rad/s) and its Gaussian prior SD (same units).
@@ -358,9 +365,11 @@ class TwoSegmentRun:
     ``measured_index``. A touchdown run that takes off (or collapses) before sample ``k`` gives the samples it has,
     the late run the rest from ``k``: the measured samples between are not compared, as the samples a run from the
     touchdown does not reach are not without :data:`SIMULATE_FROM_S`, and its net work is over the samples it has,
-    against the measured work over the same samples (:func:`_net_works_j`). Why not a penalty there: the run from
-    the touchdown state is the one whose take-off the smeared touchdown velocities make wrong (session 22, the true law
-    at 1.53 Hz 65-69 ms off), so an early end of it is no evidence against a model; the duration is the late run's.
+    against the measured work over the same samples (:func:`_net_works_j`); with :data:`TWO_SEGMENT_FLIGHT` they are
+    compared with the model in flight instead. Why not a penalty by default: the run from the touchdown state is the
+    one whose take-off the smeared touchdown velocities make wrong (session 22, the true law at 1.53 Hz 65-69 ms off),
+    so an early end of it need not be evidence against a model; the duration is the late run's. (Measured on outside
+    1201: that choice hides the baseline's bounce off the ground ~19 ms after touchdown, docs "Session 23 (helper)".)
 
     Attributes
     ----------
@@ -379,8 +388,9 @@ class TwoSegmentRun:
 
     @property
     def reached(self) -> int:
-        """How many of the samples before ``k`` the touchdown run has (``k`` unless it ended before)."""
-        return min(len(self.early.t_s), self.k)
+        """How many of the samples before ``k`` are compared from the touchdown run (``k`` unless it ended before and
+        not :data:`TWO_SEGMENT_FLIGHT`)."""
+        return self.k if TWO_SEGMENT_FLIGHT else min(len(self.early.t_s), self.k)
 
     @property
     def measured_index(self) -> np.ndarray:
@@ -388,7 +398,11 @@ class TwoSegmentRun:
         return np.r_[np.arange(self.reached), self.k + np.arange(len(self.late.t_s))]
 
     def _joined(self, name: str) -> np.ndarray:
-        return np.concatenate([getattr(self.early, name)[: self.reached], getattr(self.late, name)])
+        early = getattr(self.early, name)[: self.reached]
+        if len(early) < self.reached:  # TWO_SEGMENT_FLIGHT: in flight, no force, the rest held
+            fill = np.zeros_like(early[-1]) if name == "grf_n" else early[-1]
+            early = np.concatenate([early, np.repeat(np.asarray(fill)[None], self.reached - len(early), axis=0)])
+        return np.concatenate([early, getattr(self.late, name)])
 
     @property
     def t_s(self) -> np.ndarray:
@@ -633,7 +647,9 @@ def _net_works_j(sim, s: MeasuredStance, n: int) -> tuple[float, float]:
     samples (up to ``k``) plus the late run's, against the measured over the same samples: the whole stance unless
     the touchdown run ended before ``k`` (then without the samples between)."""
     if isinstance(sim, TwoSegmentRun):
-        early = len(sim.early.t_s)  # <= k + 1: its last sample is the late run's first unless it ended before
+        # <= k + 1: its last sample is the late run's first unless it ended before (then with TWO_SEGMENT_FLIGHT the
+        # measured work over the samples between counts too, the model's in flight is 0)
+        early = sim.k + 1 if TWO_SEGMENT_FLIGHT else len(sim.early.t_s)
         late = _simulated_work_j(sim.late, None if TWO_SIDED_DURATION else n - sim.reached)
         measured = _measured_work_before_j(s, early) + measured_net_work_j(s, sim.k)
         return _simulated_work_j(sim.early, None, 0.0) + late, measured
