@@ -33,7 +33,8 @@ measured toe velocity at the start; and, for comparison, the same from the touch
 (``forward_selection.TOUCHDOWN_VELOCITY_FIT_S`` = 0.06, one step), read two-sided too. With ``--noisy`` /
 ``--outside`` as above. ``--two-segment`` (session 23, with ``--start-after``): the runs from D with
 ``forward_selection.TWO_SEGMENT`` (the run from the touchdown compared before the start sample; the take-off is the
-late run's either way, so only G changes).
+late run's either way, so only G changes); ``--two-segment-flight``: ``forward_selection.TWO_SEGMENT_FLIGHT`` with
+it.
 
 Usage: .venv/bin/python bench/discovery_touchdown_sensitivity.py [--freq 1.53] [--seed 0] [--hops 8]
 [--fit-velocities 0.06 | --start-after 0.02 0.04 0.06 [--two-segment]] [--noisy] [--outside FILE ...]
@@ -143,7 +144,8 @@ def late_start_errors(trial, laws, grounds, deltas: list[float], label: str, two
             gaps.append(fs._gap_of(sim, s, 0.0, scales, level)["gap"])
         e = np.array(errs)
         where = {None: "touchdown", "fit": "touchdown, velocities fitted on 60 ms (1 step)"}.get(delta) or \
-            f"{1e3 * delta:.0f} ms{' (two segments)' if fs.TWO_SEGMENT else ''}"
+            f"{1e3 * delta:.0f} ms{' (two segments' if fs.TWO_SEGMENT else ''}" \
+            f"{', flight' if fs.TWO_SEGMENT and fs.TWO_SEGMENT_FLIGHT else ''}{')' if fs.TWO_SEGMENT else ''}"
         print(f"{label}: from {where}: take-off error RMS {np.sqrt(np.nanmean(e**2)):.1f} ms [{np.nanmin(e):+.1f}, "
               f"{np.nanmax(e):+.1f}], failed {int(np.isnan(e).sum())}; true law's mean G {np.mean(gaps):.4f} "
               f"[{np.min(gaps):.4f}, {np.max(gaps):.4f}]; measured toe vz at the start {np.mean(vz):+.3f} m/s "
@@ -182,12 +184,17 @@ def main() -> None:
                     help="also from the measured state D s after the touchdown (see the module docstring)")
     ap.add_argument("--two-segment", action="store_true",
                     help="with --start-after: forward_selection.TWO_SEGMENT on the runs from D (session 23)")
+    ap.add_argument("--two-segment-flight", action="store_true",
+                    help="with --two-segment: forward_selection.TWO_SEGMENT_FLIGHT (session 23)")
     ap.add_argument("--noisy", action="store_true", help="with the sensors' noise (with --fit-velocities/--start-after)")
     ap.add_argument("--outside", nargs="*", default=None,
                     help="outside recordings instead (with --fit-velocities/--start-after)")
     args = ap.parse_args()
     if args.two_segment and not args.start_after:
         ap.error("--two-segment needs --start-after")
+    if args.two_segment_flight and not args.two_segment:
+        ap.error("--two-segment-flight needs --two-segment")
+    fs.TWO_SEGMENT_FLIGHT = args.two_segment_flight
     if args.fit_velocities is not None or args.start_after:
         if args.outside is not None:
             for f in args.outside:
