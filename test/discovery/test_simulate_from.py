@@ -131,3 +131,31 @@ def test_two_segments_compare_the_touchdown_run_before_the_start_and_the_late_ru
         measured = fs.measured_net_works_j(trial, compared=True)[trial.stances.index(s)]
         assert measured == pytest.approx(fs.measured_net_work_j(s), abs=1e-9)
         assert joined["terms"][1] * scales[8] == pytest.approx(joined["net_work_j"] - measured, abs=1e-9)
+
+
+def test_a_touchdown_run_that_takes_off_before_the_start_is_skipped_there_or_compared_in_flight(monkeypatch):
+    """A law twice the generator's stiffness leaves the ground at once from the measured touchdown state (its run ends
+    at 20 samples, before the start sample 40): with ``TWO_SEGMENT`` the samples between are not compared, with
+    ``TWO_SEGMENT_FLIGHT`` they are, against zero force and the last angles, and the measured work over the whole
+    stance."""
+    rec, _ = simulate_stance_set_recording(2.2, ("rigid",), 3, 3, NULL, SensorConfig())
+    trial = measure_trial(rec)
+    law, _, _ = _stance_set_law(trial.chain, 2.2, NULL, None, RIGID_NO_BOUNCE, DEFAULT_TOUCHDOWN_RHO)
+    k0 = 2.0 * np.array(law.parts[0].k0, float)[:, None]
+    scales = fs.gap_scales(trial)
+    s = trial.stances[0]
+    fl = FittedLaw(ModelSpec(), k0, touchdown_moments(ModelSpec(), k0, s), fs.identification_reference(s))
+    monkeypatch.setattr(fs, "TWO_SEGMENT", True)
+    two, skipped = _run_and_gap(monkeypatch, trial, fl, s, 0.04)
+    j, k = len(two.early.t_s), two.k
+    assert two.early.end_reason == "take_off" and 1 < j < k
+    assert two.reached == j and skipped["samples"].shape[0] == j + len(two.late.t_s)
+    monkeypatch.setattr(fs, "TWO_SEGMENT_FLIGHT", True)
+    _, flight = _run_and_gap(monkeypatch, trial, fl, s, 0.04)
+    assert two.reached == k and flight["samples"].shape[0] == k + len(two.late.t_s)
+    assert np.array_equal(flight["samples"][j:k, 0], s.fz_raw_n[j:k] / scales[0])
+    assert np.array_equal(flight["samples"][j:k, 1], (s.rho_rad[j:k, 0] - two.early.rho_rad[-1, 0]) / scales[1])
+    assert np.array_equal(flight["samples"][k:], skipped["samples"][j:])
+    assert flight["net_work_j"] == skipped["net_work_j"]
+    work_error = flight["terms"][1] * scales[8]
+    assert work_error == pytest.approx(flight["net_work_j"] - fs.measured_net_work_j(s), abs=1e-9)
