@@ -164,14 +164,19 @@ SIMULATE_FROM_S: float | None = None
 #: :func:`_gap_of`). Why: from 60 ms alone the outside angle law (1201) is lost, an activation named instead
 #: (session 22): what tells a soft joint stiffening with flexion apart is in the stance's first tens of ms, no longer
 #: compared; the touchdown run keeps that evidence, the late run keeps the take-off free of the smeared touchdown
-#: velocities. Without :data:`SIMULATE_FROM_S` it does nothing.
+#: velocities. Without :data:`SIMULATE_FROM_S` it does nothing. Not the default (session 23): alone it still loses
+#: 1201 (an activation named; its baseline's run from the touchdown leaves the ground at once and the samples it does
+#: not reach are not compared), with :data:`TWO_SEGMENT_FLIGHT` see there.
 TWO_SEGMENT = False
 #: Session 23 (a sub-option of :data:`TWO_SEGMENT`, off): where the run from the touchdown takes off (or collapses)
 #: before the start sample, the measured samples between are compared with that model in flight (zero force; angles,
 #: rates and moments held at its last sample; no joint work) against the measured ones and the measured work over the
 #: whole stance, instead of not compared. Why: on outside 1201 the constant-stiffness baseline's run from the
 #: touchdown bounces off ~19 ms after it in every stance (the default's strongest evidence for the angle law), and not
-#: comparing those 40 ms leaves the baseline the fewer and easier samples (:class:`TwoSegmentRun`).
+#: comparing those 40 ms leaves the baseline the fewer and easier samples (:class:`TwoSegmentRun`). With it at
+#: ``SIMULATE_FROM_S = 0.06`` (session 23): 1201 named exactly, the bundled trial's surface, 1501 exact, null 1101
+#: clean, 7/8 of our simulator's 1.53 Hz effect cases exact (push-off on the soft surface + activation) and its null
+#: clean; not the default (not yet measured on every null set).
 TWO_SEGMENT_FLIGHT = False
 #: A loss and its source: (loss, source), identified in that order.
 PAIRS: tuple[tuple[str, str], ...] = (("surface_compliance", "active_push_off"), ("joint_damping", "active_push_off"))
