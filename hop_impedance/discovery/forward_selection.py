@@ -175,8 +175,9 @@ TWO_SEGMENT = False
 #: touchdown bounces off ~19 ms after it in every stance (the default's strongest evidence for the angle law), and not
 #: comparing those 40 ms leaves the baseline the fewer and easier samples (:class:`TwoSegmentRun`). With it at
 #: ``SIMULATE_FROM_S = 0.06`` (session 23): 1201 named exactly, the bundled trial's surface, 1501 exact, null 1101
-#: clean, 7/8 of our simulator's 1.53 Hz effect cases exact (push-off on the soft surface + activation) and its null
-#: clean; not the default (not yet measured on every null set).
+#: clean, 7/8 of our simulator's 1.53 Hz effect cases exact (push-off on the soft surface + activation), outside
+#: 5/8 exact and 0/6 nulls as the default, but the angle law named on 3/5 of the second generator's nulls (a law soft
+#: at touchdown avoids the bounce off the smeared touchdown state whatever the data): not the default.
 TWO_SEGMENT_FLIGHT = False
 #: A loss and its source: (loss, source), identified in that order.
 PAIRS: tuple[tuple[str, str], ...] = (("surface_compliance", "active_push_off"), ("joint_damping", "active_push_off"))
