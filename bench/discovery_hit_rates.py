@@ -48,7 +48,10 @@ corrected on the stance's first W s of joint angles; session 17's option, off by
 single candidate passes); ``--accept-step``: ``forward_selection.VELOCITY_FIT_ACCEPT`` (session 20's sub-option of
 the velocity fit: the step checked; its ``--velocity-fit-shared``, not adopted, was removed in session 23 and runs at
 commit a93ac09); ``--simulate-from D``: ``forward_selection.SIMULATE_FROM_S`` (session 22's option: every held-out
-stance simulated from the measured state D s after its touchdown, compared from there); set in this
+stance simulated from the measured state D s after its touchdown, compared from there); ``--two-segment``:
+``forward_selection.TWO_SEGMENT`` with it (session 23's sub-option: the run from the touchdown compared before the
+start sample, the late run from it), ``--two-segment-flight``: ``forward_selection.TWO_SEGMENT_FLIGHT`` with that
+(a run from the touchdown that takes off before the start sample compared as in flight up to it); set in this
 process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
@@ -171,6 +174,12 @@ def main() -> None:
     ap.add_argument("--simulate-from", type=float, default=None, metavar="D",
                     help="forward_selection.SIMULATE_FROM_S = D: held-out stances simulated from the measured state "
                          "D s after touchdown (session 22's option)")
+    ap.add_argument("--two-segment", action="store_true",
+                    help="with --simulate-from: forward_selection.TWO_SEGMENT = True (session 23's option): the run "
+                         "from the touchdown compared before the start sample, the late run from it")
+    ap.add_argument("--two-segment-flight", action="store_true",
+                    help="with --two-segment: forward_selection.TWO_SEGMENT_FLIGHT = True (session 23's option): a run "
+                         "from the touchdown that takes off before the start sample compared as in flight up to it")
     ap.add_argument("--angle-terms", default=None, metavar="TERMS",
                     help="model.ANGLE_TERMS, e.g. k1 (seed 000's Eq. 10) or k1,k2 (Eq. 3, the default)")
     ap.add_argument("--energy-pairs", action="store_true",
@@ -185,6 +194,10 @@ def main() -> None:
     ap.add_argument("--no-gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = False: the gate of sessions 8-16 (the total gap only)")
     args = ap.parse_args()
+    if args.two_segment and args.simulate_from is None:
+        ap.error("--two-segment needs --simulate-from")
+    if args.two_segment_flight and not args.two_segment:
+        ap.error("--two-segment-flight needs --two-segment")
     _configure_gate(ap, args)
     JSON_DIR[:] = [args.json_dir] if args.json_dir else []
     sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})
@@ -224,6 +237,8 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--eq7-fit", identify, "EQ7_FIT", True if args.eq7_fit else None),
             ("--touchdown-velocity-fit", forward_selection, "TOUCHDOWN_VELOCITY_FIT_S", args.touchdown_velocity_fit),
             ("--simulate-from", forward_selection, "SIMULATE_FROM_S", args.simulate_from),
+            ("--two-segment", forward_selection, "TWO_SEGMENT", True if args.two_segment else None),
+            ("--two-segment-flight", forward_selection, "TWO_SEGMENT_FLIGHT", True if args.two_segment_flight else None),
             ("--angle-terms", model, "ANGLE_TERMS", tuple(args.angle_terms.split(",")) if args.angle_terms else None),
             ("--energy-pairs", forward_selection, "ENERGY_PAIRS", True if args.energy_pairs else None),
             ("--accept-step", forward_selection, "VELOCITY_FIT_ACCEPT", True if args.accept_step else None),

@@ -21,11 +21,14 @@ sub-options measured and not adopted, were removed in session 23; they run at co
 
 ``--simulate-from D`` (session 22): ``forward_selection.SIMULATE_FROM_S`` = D instead of the fit in the runs "with"
 (every held-out stance simulated from the measured state D s after its touchdown and compared from there; the fit
-column then reads ``from D``).
+column then reads ``from D``). ``--two-segment`` (session 23, with ``--simulate-from``):
+``forward_selection.TWO_SEGMENT`` too (the touchdown run compared before the start sample, the late run from it; the
+column reads ``2seg D``); ``--two-segment-flight``: ``forward_selection.TWO_SEGMENT_FLIGHT`` too (a run from the
+touchdown that takes off before the start sample compared as in flight up to it).
 
 Usage: .venv/bin/python bench/discovery_stance_terms.py REC.mcap [--touchdown-velocity-fit 0.06] [--stances 5,6,8]
        [--discover] [--accept-step] [--fit-only]
-       [--simulate-from 0.06]
+       [--simulate-from 0.06 [--two-segment]]
 """
 
 from __future__ import annotations
@@ -50,7 +53,16 @@ def main() -> None:
     ap.add_argument("--fit-only", action="store_true", help="only the runs with the fit")
     ap.add_argument("--simulate-from", type=float, default=None, metavar="D",
                     help="forward_selection.SIMULATE_FROM_S = D instead of the fit (session 22)")
+    ap.add_argument("--two-segment", action="store_true",
+                    help="with --simulate-from: forward_selection.TWO_SEGMENT = True (session 23)")
+    ap.add_argument("--two-segment-flight", action="store_true",
+                    help="with --two-segment: forward_selection.TWO_SEGMENT_FLIGHT = True (session 23)")
     args = ap.parse_args()
+    if args.two_segment and args.simulate_from is None:
+        ap.error("--two-segment needs --simulate-from")
+    if args.two_segment_flight and not args.two_segment:
+        ap.error("--two-segment-flight needs --two-segment")
+    fs.TWO_SEGMENT_FLIGHT = args.two_segment_flight
     fs.VELOCITY_FIT_ACCEPT = args.accept_step  # module options: set before any evaluator forks its workers
     rec = load_recording(args.recording)
     trial = measure_trial(rec)
@@ -59,12 +71,15 @@ def main() -> None:
     print("stance  fit     G       GRF  ang_a ang_k ang_h mom_a mom_k mom_h  duration ms  work sim / measured J  end")
     means = {}
     with_fit = f"from {args.simulate_from}" if args.simulate_from is not None else args.touchdown_velocity_fit
+    if args.two_segment:
+        with_fit = f"2seg{'F' if args.two_segment_flight else ''} {args.simulate_from}"
     windows = (with_fit,) if args.fit_only else (None, with_fit)
 
     def configure(window) -> None:  # before the evaluator forks its workers, which read it
         late = isinstance(window, str)
         fs.TOUCHDOWN_VELOCITY_FIT_S = None if late else window
         fs.SIMULATE_FROM_S = args.simulate_from if late else None
+        fs.TWO_SEGMENT = late and args.two_segment
 
     for window in windows:
         configure(window)

@@ -31,10 +31,13 @@ D s after the touchdown (``forward_selection.late_start``), each take-off read t
 printed per D: the simulated minus measured take-off RMS [min, max] (ms), the true law's mean held-out gap G, and the
 measured toe velocity at the start; and, for comparison, the same from the touchdown with the velocities fitted
 (``forward_selection.TOUCHDOWN_VELOCITY_FIT_S`` = 0.06, one step), read two-sided too. With ``--noisy`` /
-``--outside`` as above.
+``--outside`` as above. ``--two-segment`` (session 23, with ``--start-after``): the runs from D with
+``forward_selection.TWO_SEGMENT`` (the run from the touchdown compared before the start sample; the take-off is the
+late run's either way, so only G changes); ``--two-segment-flight``: ``forward_selection.TWO_SEGMENT_FLIGHT`` with
+it.
 
 Usage: .venv/bin/python bench/discovery_touchdown_sensitivity.py [--freq 1.53] [--seed 0] [--hops 8]
-[--fit-velocities 0.06 | --start-after 0.02 0.04 0.06] [--noisy] [--outside FILE ...]
+[--fit-velocities 0.06 | --start-after 0.02 0.04 0.06 [--two-segment]] [--noisy] [--outside FILE ...]
 """
 
 from __future__ import annotations
@@ -115,15 +118,17 @@ def take_off_errors(trial, laws, grounds, window_s: float, label: str) -> None:
           flush=True)
 
 
-def late_start_errors(trial, laws, grounds, deltas: list[float], label: str) -> None:
+def late_start_errors(trial, laws, grounds, deltas: list[float], label: str, two_segment: bool = False) -> None:
     """Print the true law's simulated minus measured take-off (two-sided) and mean gap from the measured touchdown
-    state and from the measured state ``delta`` s after it (``forward_selection.SIMULATE_FROM_S``), per ``delta``."""
+    state and from the measured state ``delta`` s after it (``forward_selection.SIMULATE_FROM_S``; with
+    ``two_segment`` and ``forward_selection.TWO_SEGMENT``), per ``delta``."""
     level, scales = fs.take_off_level_n(trial), fs.gap_scales(trial)
     t0 = time.perf_counter()
     fs.TWO_SIDED_DURATION = True
     for delta in (None, "fit", *deltas):
         fs.TOUCHDOWN_VELOCITY_FIT_S = 0.06 if delta == "fit" else None
         fs.SIMULATE_FROM_S = None if delta in (None, "fit") else delta
+        fs.TWO_SEGMENT = two_segment and fs.SIMULATE_FROM_S is not None
         errs, gaps, vz = [], [], []
         for s, law, ground in zip(trial.stances, laws, grounds):
             measured = float(s.takeoff_s - s.touchdown_s)
@@ -139,21 +144,23 @@ def late_start_errors(trial, laws, grounds, deltas: list[float], label: str) -> 
             gaps.append(fs._gap_of(sim, s, 0.0, scales, level)["gap"])
         e = np.array(errs)
         where = {None: "touchdown", "fit": "touchdown, velocities fitted on 60 ms (1 step)"}.get(delta) or \
-            f"{1e3 * delta:.0f} ms"
+            f"{1e3 * delta:.0f} ms{' (two segments' if fs.TWO_SEGMENT else ''}" \
+            f"{', flight' if fs.TWO_SEGMENT and fs.TWO_SEGMENT_FLIGHT else ''}{')' if fs.TWO_SEGMENT else ''}"
         print(f"{label}: from {where}: take-off error RMS {np.sqrt(np.nanmean(e**2)):.1f} ms [{np.nanmin(e):+.1f}, "
               f"{np.nanmax(e):+.1f}], failed {int(np.isnan(e).sum())}; true law's mean G {np.mean(gaps):.4f} "
               f"[{np.min(gaps):.4f}, {np.max(gaps):.4f}]; measured toe vz at the start {np.mean(vz):+.3f} m/s "
               f"[{np.min(vz):+.3f}, {np.max(vz):+.3f}]; per stance (ms) {np.round(e, 1).tolist()}", flush=True)
-    fs.SIMULATE_FROM_S, fs.TWO_SIDED_DURATION, fs.TOUCHDOWN_VELOCITY_FIT_S = None, False, None
+    fs.SIMULATE_FROM_S, fs.TWO_SIDED_DURATION, fs.TOUCHDOWN_VELOCITY_FIT_S, fs.TWO_SEGMENT = None, False, None, False
     print(f"  ({len(trial.stances)} stances, {time.perf_counter() - t0:.1f} s)", flush=True)
 
 
-def outside_fit(path: Path, window_s: float | None, deltas: list[float] | None = None) -> None:
+def outside_fit(path: Path, window_s: float | None, deltas: list[float] | None = None,
+                two_segment: bool = False) -> None:
     """:func:`take_off_errors` (or with ``deltas`` :func:`late_start_errors`) on an outside recording with its truth
     law (``discovery_truth_gap.outside_truth``)."""
     _, _, trial, _, laws, grounds = outside_truth(path, "estimated")
     if deltas:
-        late_start_errors(trial, laws, grounds, deltas, path.stem)
+        late_start_errors(trial, laws, grounds, deltas, path.stem, two_segment)
     else:
         take_off_errors(trial, laws, grounds, window_s, path.stem)
 
@@ -175,14 +182,23 @@ def main() -> None:
                     help="the touchdown velocities fitted to the first W s (see the module docstring)")
     ap.add_argument("--start-after", type=float, nargs="+", default=None, metavar="D",
                     help="also from the measured state D s after the touchdown (see the module docstring)")
+    ap.add_argument("--two-segment", action="store_true",
+                    help="with --start-after: forward_selection.TWO_SEGMENT on the runs from D (session 23)")
+    ap.add_argument("--two-segment-flight", action="store_true",
+                    help="with --two-segment: forward_selection.TWO_SEGMENT_FLIGHT (session 23)")
     ap.add_argument("--noisy", action="store_true", help="with the sensors' noise (with --fit-velocities/--start-after)")
     ap.add_argument("--outside", nargs="*", default=None,
                     help="outside recordings instead (with --fit-velocities/--start-after)")
     args = ap.parse_args()
+    if args.two_segment and not args.start_after:
+        ap.error("--two-segment needs --start-after")
+    if args.two_segment_flight and not args.two_segment:
+        ap.error("--two-segment-flight needs --two-segment")
+    fs.TWO_SEGMENT_FLIGHT = args.two_segment_flight
     if args.fit_velocities is not None or args.start_after:
         if args.outside is not None:
             for f in args.outside:
-                outside_fit(Path(f), args.fit_velocities, args.start_after)
+                outside_fit(Path(f), args.fit_velocities, args.start_after, args.two_segment)
             return
         sensors = SensorConfig() if args.noisy else noise_free(SensorConfig())
         rec, _ = sset.simulate_stance_set_recording(args.freq, ("rigid",), args.hops, args.seed, NULL, sensors)
@@ -192,7 +208,8 @@ def main() -> None:
         laws = [fitted_law("estimated", ModelSpec(), k0, touchdown_moments(ModelSpec(), k0, s), s) for s in trial.stances]
         label = f"our simulator's null, {args.freq} Hz, seed {args.seed}{', noisy' if args.noisy else ''}"
         if args.start_after:
-            late_start_errors(trial, laws, [sset.RIGID_NO_BOUNCE] * len(laws), args.start_after, label)
+            late_start_errors(trial, laws, [sset.RIGID_NO_BOUNCE] * len(laws), args.start_after, label,
+                              args.two_segment)
         else:
             take_off_errors(trial, laws, [sset.RIGID_NO_BOUNCE] * len(laws), args.fit_velocities, label)
         return

@@ -91,3 +91,71 @@ def test_the_late_start_carries_the_measured_force_and_is_compared_from_there(mo
     s = trial.stances[0]
     assert fs.start_index(s) == 0
     assert np.array_equal(fs.late_start(trial.chain, fl, RIGID_NO_BOUNCE, s).state.gd, s.touchdown.gd)
+
+
+def _run_and_gap(monkeypatch, trial, law, s, simulate_from):
+    """Stance ``s`` simulated as discovery does with ``SIMULATE_FROM_S`` = ``simulate_from``, and its gap figures."""
+    monkeypatch.setattr(fs, "SIMULATE_FROM_S", simulate_from)
+    sim = fs.simulate_for_gap(trial.chain, law, RIGID_NO_BOUNCE, s)
+    return sim, fs._gap_of(sim, s, 0.0, fs.gap_scales(trial), np.nan, samples=True)
+
+
+def test_two_segments_compare_the_touchdown_run_before_the_start_and_the_late_run_after(monkeypatch):
+    """``TWO_SEGMENT`` (session 23): the compared samples before the start sample are the run from the touchdown's
+    (integrated only that far, so equal to the default run's to the solver's tolerance, not to the bit), those from it
+    on the late run's to the bit; the duration is the late run's, the net work the two runs' together against the
+    whole measured stance's."""
+    rec, _ = simulate_stance_set_recording(2.2, ("rigid",), 3, 3, NULL, SensorConfig())
+    trial = measure_trial(rec)
+    law, _, _ = _stance_set_law(trial.chain, 2.2, NULL, None, RIGID_NO_BOUNCE, DEFAULT_TOUCHDOWN_RHO)
+    k0 = np.array(law.parts[0].k0, float)[:, None]
+    scales = fs.gap_scales(trial)
+    monkeypatch.setattr(fs, "TWO_SEGMENT", True)
+    for s in trial.stances:
+        fl = FittedLaw(ModelSpec(), k0, touchdown_moments(ModelSpec(), k0, s), fs.identification_reference(s))
+
+        default, from_td = _run_and_gap(monkeypatch, trial, fl, s, None)  # TWO_SEGMENT alone changes nothing
+        assert not isinstance(default, fs.TwoSegmentRun)
+        two, joined = _run_and_gap(monkeypatch, trial, fl, s, 0.04)
+        k = fs.start_index(s)
+        monkeypatch.setattr(fs, "TWO_SEGMENT", False)
+        _, late = _run_and_gap(monkeypatch, trial, fl, s, 0.04)
+        monkeypatch.setattr(fs, "TWO_SEGMENT", True)
+        assert isinstance(two, fs.TwoSegmentRun) and two.k == k > 0 and two.reached == k
+        assert np.array_equal(two.measured_index, np.arange(k + len(two.late.t_s)))
+        assert np.allclose(joined["samples"][:k], from_td["samples"][:k], rtol=0, atol=1e-4)
+        assert np.array_equal(joined["samples"][k:], late["samples"])
+        assert joined["duration_error_s"] == late["duration_error_s"]
+        early_work = fs._simulated_work_j(two.early, None)
+        assert joined["net_work_j"] == pytest.approx(early_work + late["net_work_j"], abs=1e-9)
+        measured = fs.measured_net_works_j(trial, compared=True)[trial.stances.index(s)]
+        assert measured == pytest.approx(fs.measured_net_work_j(s), abs=1e-9)
+        assert joined["terms"][1] * scales[8] == pytest.approx(joined["net_work_j"] - measured, abs=1e-9)
+
+
+def test_a_touchdown_run_that_takes_off_before_the_start_is_skipped_there_or_compared_in_flight(monkeypatch):
+    """A law twice the generator's stiffness leaves the ground at once from the measured touchdown state (its run ends
+    at 20 samples, before the start sample 40): with ``TWO_SEGMENT`` the samples between are not compared, with
+    ``TWO_SEGMENT_FLIGHT`` they are, against zero force and the last angles, and the measured work over the whole
+    stance."""
+    rec, _ = simulate_stance_set_recording(2.2, ("rigid",), 3, 3, NULL, SensorConfig())
+    trial = measure_trial(rec)
+    law, _, _ = _stance_set_law(trial.chain, 2.2, NULL, None, RIGID_NO_BOUNCE, DEFAULT_TOUCHDOWN_RHO)
+    k0 = 2.0 * np.array(law.parts[0].k0, float)[:, None]
+    scales = fs.gap_scales(trial)
+    s = trial.stances[0]
+    fl = FittedLaw(ModelSpec(), k0, touchdown_moments(ModelSpec(), k0, s), fs.identification_reference(s))
+    monkeypatch.setattr(fs, "TWO_SEGMENT", True)
+    two, skipped = _run_and_gap(monkeypatch, trial, fl, s, 0.04)
+    j, k = len(two.early.t_s), two.k
+    assert two.early.end_reason == "take_off" and 1 < j < k
+    assert two.reached == j and skipped["samples"].shape[0] == j + len(two.late.t_s)
+    monkeypatch.setattr(fs, "TWO_SEGMENT_FLIGHT", True)
+    _, flight = _run_and_gap(monkeypatch, trial, fl, s, 0.04)
+    assert two.reached == k and flight["samples"].shape[0] == k + len(two.late.t_s)
+    assert np.array_equal(flight["samples"][j:k, 0], s.fz_raw_n[j:k] / scales[0])
+    assert np.array_equal(flight["samples"][j:k, 1], (s.rho_rad[j:k, 0] - two.early.rho_rad[-1, 0]) / scales[1])
+    assert np.array_equal(flight["samples"][k:], skipped["samples"][j:])
+    assert flight["net_work_j"] == skipped["net_work_j"]
+    work_error = flight["terms"][1] * scales[8]
+    assert work_error == pytest.approx(flight["net_work_j"] - fs.measured_net_work_j(s), abs=1e-9)
