@@ -437,8 +437,10 @@ def out_cells(results: dict) -> list[str]:
         if np.isfinite(sim) and abs(sim / seed - 1.0) > band:
             out.setdefault(name, []).append(f"{f:.2f} Hz {sim / seed - 1.0:+.0%}")
             bands[name] = band
-            joint = JOINT_NAMES.index(name.split()[0])
-            cause = law_moment_cause(f, joint, sim, results[f]["rom"][joint]) if "max moment" in name else None
+            cause = None
+            if "max moment" in name:
+                joint = JOINT_NAMES.index(name.split()[0])
+                cause = law_moment_cause(f, joint, sim, results[f]["rom"][joint])
             measured.setdefault(name, []).append(cause or f"{f:.2f} Hz not found")
     return [f"- OUT {name} (band {bands[name]:.0%}) at {', '.join(cells)}: cause: "
             + (OUT_CAUSES[name] if name in OUT_CAUSES else "; ".join(measured[name]))

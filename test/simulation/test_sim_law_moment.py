@@ -45,3 +45,22 @@ def test_cause_only_when_the_moment_follows_the_law():
     assert r.law_moment_cause(1.53, 1, 1.2 * law, 0.77) is None  # more than the law gives: another cause
     assert r.law_moment_cause(1.53, 1, 1.03 * r.table2_law_moment(1.53, 1, 0.90), 0.90) is None  # range out of band
     assert r.law_moment_cause(1.87, 1, 1.3 * 115.3, 0.42) is None  # the law over the seed's range is in band there
+
+
+def test_out_cells_lists_every_quantity_with_its_cause():
+    """bench/simulator_realism.out_cells on made-up figures: a stance time out (no cause listed: 'not found'), the
+    hip excursion (its listed cause) and a 1.53 Hz knee moment that follows the law over a range in band (measured)."""
+    r = realism()
+    results = {}
+    for f, seed in r.SEED_TABLE1.items():
+        results[f] = {"stance_ms": seed["stance_ms"], "grf_bw": seed["grf_bw"], "hip_exc_m": seed["hip_exc_m"],
+                      "rom": list(seed["rom"]), "mmax": list(seed["mmax"])}
+    results[1.87]["stance_ms"] *= 0.5
+    results[2.2]["hip_exc_m"] *= 0.6
+    results[1.53]["rom"][1] = 0.77
+    results[1.53]["mmax"][1] = r.table2_law_moment(1.53, 1, 0.77)
+    lines = {line.split(" (")[0]: line for line in r.out_cells(results)}
+    assert set(lines) == {"- OUT stance time", "- OUT hip vertical excursion", "- OUT knee max moment"}
+    assert lines["- OUT stance time"].endswith("cause: 1.87 Hz not found")
+    assert "the seed's own tables disagree" in lines["- OUT knee max moment"]
+    assert "hip_over_com_drop_bound" in lines["- OUT hip vertical excursion"]
