@@ -78,7 +78,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simulator_realism import (  # noqa: E402  (a bench next to this one)
     SEED_TABLE1,
     binding_cells,
-    law_moment_cause,
+    cell_cause,
     replace_between_markers,
     summarise,
 )
@@ -265,12 +265,9 @@ def percent(x: float) -> str:
 
 
 def cause_mark(name: str, freq_hz: float, realism: dict) -> str:
-    """' (the seed's tables)' after a maximal-moment cell out that :func:`simulator_realism.law_moment_cause` explains
-    (the printed cause in bench/simulator_realism.py's list of cells out)."""
-    if "max moment" not in name:
-        return ""
-    joint = ("ankle", "knee").index(name.split()[0])
-    found = law_moment_cause(freq_hz, joint, realism["mmax"][joint], realism["rom"][joint])
+    """A mark after a cell out whose cause bench/simulator_realism.py measures (:func:`simulator_realism.cell_cause`:
+    a maximal moment that is the seed's Table 2 law over a range in band); the cause itself is printed there."""
+    found = cell_cause(name, freq_hz, realism)
     return " (cause: the seed's Table 2 law over the range, simulator_realism.law_moment_cause)" if found else ""
 
 

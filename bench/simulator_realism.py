@@ -427,6 +427,15 @@ def law_moment_cause(freq_hz: float, joint: int, mmax_nm: float, rom_rad: float)
             f"(simulator_realism.law_moment_cause)")
 
 
+def cell_cause(name: str, freq_hz: float, result: dict) -> str | None:
+    """The cause measured for one binding cell out of band (``name`` as :func:`binding_cells` names it, ``result``
+    :func:`measure`'s figures at ``freq_hz``): :func:`law_moment_cause` for a maximal moment, else None."""
+    if "max moment" not in name:
+        return None
+    joint = JOINT_NAMES.index(name.split()[0])
+    return law_moment_cause(freq_hz, joint, result["mmax"][joint], result["rom"][joint])
+
+
 def out_cells(results: dict) -> list[str]:
     """One line per quantity with binding cells outside their band: the cells and the cause (:data:`OUT_CAUSES`, or
     for a maximal moment :func:`law_moment_cause`, measured per cell)."""
@@ -437,11 +446,7 @@ def out_cells(results: dict) -> list[str]:
         if np.isfinite(sim) and abs(sim / seed - 1.0) > band:
             out.setdefault(name, []).append(f"{f:.2f} Hz {sim / seed - 1.0:+.0%}")
             bands[name] = band
-            cause = None
-            if "max moment" in name:
-                joint = JOINT_NAMES.index(name.split()[0])
-                cause = law_moment_cause(f, joint, sim, results[f]["rom"][joint])
-            measured.setdefault(name, []).append(cause or f"{f:.2f} Hz not found")
+            measured.setdefault(name, []).append(cell_cause(name, f, results[f]) or f"{f:.2f} Hz not found")
     return [f"- OUT {name} (band {bands[name]:.0%}) at {', '.join(cells)}: cause: "
             + (OUT_CAUSES[name] if name in OUT_CAUSES else "; ".join(measured[name]))
             for name, cells in out.items()]

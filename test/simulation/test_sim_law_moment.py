@@ -64,3 +64,13 @@ def test_out_cells_lists_every_quantity_with_its_cause():
     assert lines["- OUT stance time"].endswith("cause: 1.87 Hz not found")
     assert "the seed's own tables disagree" in lines["- OUT knee max moment"]
     assert "hip_over_com_drop_bound" in lines["- OUT hip vertical excursion"]
+
+
+def test_issue17_rule_row_marks_the_same_cells():
+    """bench/simulator_issue17.py's rule row marks a cell out with the cause simulator_realism measures, no other."""
+    issue17 = bench_module("simulator_issue17")
+    law = realism().table2_law_moment(1.53, 1, 0.77)
+    figures = {"mmax": [200.0, law, 40.0], "rom": [0.85, 0.77, 0.37]}
+    assert "law_moment_cause" in issue17.cause_mark("knee max moment (N m)", 1.53, figures)
+    assert issue17.cause_mark("knee max moment (N m)", 1.53, {**figures, "mmax": [200.0, 1.3 * law, 40.0]}) == ""
+    assert issue17.cause_mark("stance time (ms)", 1.53, figures) == ""
