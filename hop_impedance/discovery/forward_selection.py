@@ -239,10 +239,11 @@ class HeldOutRuns:
         return out
 
 
-def measured_net_work_j(s: MeasuredStance, first: int = 0) -> float:
-    """Net joint work of one measured stance (J, all joints): ``int -M omega dt`` (flexion-positive angles); from
-    its sample ``first`` on."""
-    return float(np.sum(trapezoid(-s.moment_nm[first:] * s.omega_rad_s[first:], s.t_s[first:], axis=0)))
+def measured_net_work_j(s: MeasuredStance, first: int = 0, stop: int | None = None) -> float:
+    """Net joint work of one measured stance (J, all joints): ``int -M omega dt`` (flexion-positive angles); over
+    its samples ``first`` to ``stop`` (None: to its end; 0 with fewer than 2 samples)."""
+    part = slice(first, stop)
+    return float(np.sum(trapezoid(-s.moment_nm[part] * s.omega_rad_s[part], s.t_s[part], axis=0)))
 
 
 def measured_net_works_j(trial: MeasuredTrial, compared: bool = False) -> np.ndarray:
@@ -657,15 +658,10 @@ def _net_works_j(sim, s: MeasuredStance, n: int) -> tuple[float, float]:
         # measured work over the samples between counts too, the model's in flight is 0)
         early = sim.k + 1 if TWO_SEGMENT_FLIGHT else len(sim.early.t_s)
         late = _simulated_work_j(sim.late, None if TWO_SIDED_DURATION else n - sim.reached)
-        measured = _measured_work_before_j(s, early) + measured_net_work_j(s, sim.k)
+        measured = measured_net_work_j(s, 0, early) + measured_net_work_j(s, sim.k)
         return _simulated_work_j(sim.early, None, 0.0) + late, measured
     k = start_index(s) if sim.start_s > 0 else 0
     return _simulated_work_j(sim, None if TWO_SIDED_DURATION else n), measured_net_work_j(s, k)
-
-
-def _measured_work_before_j(s: MeasuredStance, stop: int) -> float:
-    """Net joint work of the measured stance ``s`` over its first ``stop`` samples (J; 0 with fewer than 2)."""
-    return float(np.sum(trapezoid(-s.moment_nm[:stop] * s.omega_rad_s[:stop], s.t_s[:stop], axis=0)))
 
 
 def _run_one(task: tuple) -> dict:
