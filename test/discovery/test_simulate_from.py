@@ -159,3 +159,51 @@ def test_a_touchdown_run_that_takes_off_before_the_start_is_skipped_there_or_com
     assert flight["net_work_j"] == skipped["net_work_j"]
     work_error = flight["terms"][1] * scales[8]
     assert work_error == pytest.approx(flight["net_work_j"] - fs.measured_net_work_j(s), abs=1e-9)
+
+
+def test_a_short_first_segment_compares_every_model_over_the_same_samples(monkeypatch):
+    """``TWO_SEGMENT_FIRST_S`` (session 24): the touchdown run compared over the samples before the first at or after
+    20 ms only (the stance guard: a run that leaves the ground at once, the law twice the generator's stiffness, is
+    sampled up to there with zero force), the samples from there to the start not compared, for the generator's law and
+    the bouncing one alike; the late run's samples as with ``TWO_SEGMENT``; the work over the same samples. With it set
+    but ``TWO_SEGMENT`` off nothing changes."""
+    rec, _ = simulate_stance_set_recording(2.2, ("rigid",), 3, 3, NULL, SensorConfig())
+    trial = measure_trial(rec)
+    law, _, _ = _stance_set_law(trial.chain, 2.2, NULL, None, RIGID_NO_BOUNCE, DEFAULT_TOUCHDOWN_RHO)
+    scales = fs.gap_scales(trial)
+    s = trial.stances[0]
+    monkeypatch.setattr(fs, "TWO_SEGMENT_FIRST_S", 0.02)
+    plain, _ = _run_and_gap(monkeypatch, trial, law_for(law, s, 1.0), s, 0.04)
+    assert not isinstance(plain, fs.TwoSegmentRun) and fs.first_segment_index(s) is None
+    monkeypatch.setattr(fs, "TWO_SEGMENT", True)
+    k1 = fs.first_segment_index(s)
+    assert s.t_s[k1] >= 0.02 > s.t_s[k1 - 1] and 1 < k1 < fs.start_index(s)
+    for factor, bounces in ((1.0, False), (2.0, True)):
+        fl = law_for(law, s, factor)
+        monkeypatch.setattr(fs, "TWO_SEGMENT_FIRST_S", None)
+        whole, whole_gap = _run_and_gap(monkeypatch, trial, fl, s, 0.04)
+        monkeypatch.setattr(fs, "TWO_SEGMENT_FIRST_S", 0.02)
+        two, short = _run_and_gap(monkeypatch, trial, fl, s, 0.04)
+        k = two.k
+        assert (whole.early.end_reason == "take_off" and len(whole.early.t_s) < k) == bounces
+        assert two.k1 == k1 and two.reached == k1 and len(two.early.t_s) >= k1
+        assert np.array_equal(two.measured_index, np.r_[np.arange(k1), k + np.arange(len(two.late.t_s))])
+        assert np.allclose(short["samples"][:k1], whole_gap["samples"][:k1], rtol=0, atol=1e-4)
+        assert np.array_equal(short["samples"][k1:], whole_gap["samples"][whole.reached:])
+        assert short["duration_error_s"] == whole_gap["duration_error_s"]
+        measured = fs.measured_net_work_j(s, 0, len(two.early.t_s)) + fs.measured_net_work_j(s, k)
+        if not bounces:  # up to sample k1 itself; the bouncing run ends at the guard, one sample short of it
+            assert len(two.early.t_s) == k1 + 1
+            assert fs.measured_net_works_j(trial, compared=True)[0] == pytest.approx(measured, abs=1e-9)
+        assert short["terms"][1] * scales[8] == pytest.approx(short["net_work_j"] - measured, abs=1e-9)
+        monkeypatch.setattr(fs, "TWO_SEGMENT_FLIGHT", True)  # every sample before k1 reached: nothing filled
+        _, flight = _run_and_gap(monkeypatch, trial, fl, s, 0.04)
+        monkeypatch.setattr(fs, "TWO_SEGMENT_FLIGHT", False)
+        assert np.array_equal(flight["samples"], short["samples"])
+        assert (flight["terms"][1] == short["terms"][1]) != bounces  # the flight's measured work: up to k1 itself
+
+
+def law_for(law, s, factor: float) -> FittedLaw:
+    """The generator's stiffness times ``factor`` as a candidate law for stance ``s`` (``M_td`` estimated)."""
+    k0 = factor * np.array(law.parts[0].k0, float)[:, None]
+    return FittedLaw(ModelSpec(), k0, touchdown_moments(ModelSpec(), k0, s), fs.identification_reference(s))
