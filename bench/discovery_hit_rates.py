@@ -51,10 +51,8 @@ commit a93ac09); ``--simulate-from D``: ``forward_selection.SIMULATE_FROM_S`` (s
 stance simulated from the measured state D s after its touchdown, compared from there); ``--two-segment``:
 ``forward_selection.TWO_SEGMENT`` with it (session 23's sub-option: the run from the touchdown compared before the
 start sample, the late run from it), ``--two-segment-flight``: ``forward_selection.TWO_SEGMENT_FLIGHT`` with that
-(a run from the touchdown that takes off before the start sample compared as in flight up to it),
-``--two-segment-first D1``: ``forward_selection.TWO_SEGMENT_FIRST_S`` with ``--two-segment`` (session 24's sub-option:
-the run from the touchdown compared over its first D1 s only, the samples from there to the start not compared); set
-in this process, so only without ``--scheduler``. Run with
+(a run from the touchdown that takes off before the start sample compared as in flight up to it); set in this
+process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
 """
@@ -182,9 +180,6 @@ def main() -> None:
     ap.add_argument("--two-segment-flight", action="store_true",
                     help="with --two-segment: forward_selection.TWO_SEGMENT_FLIGHT = True (session 23's option): a run "
                          "from the touchdown that takes off before the start sample compared as in flight up to it")
-    ap.add_argument("--two-segment-first", type=float, default=None, metavar="D1",
-                    help="with --two-segment: forward_selection.TWO_SEGMENT_FIRST_S = D1 (session 24's option): the "
-                         "run from the touchdown compared over its first D1 s only (0.02: the stance guard)")
     ap.add_argument("--angle-terms", default=None, metavar="TERMS",
                     help="model.ANGLE_TERMS, e.g. k1 (seed 000's Eq. 10) or k1,k2 (Eq. 3, the default)")
     ap.add_argument("--energy-pairs", action="store_true",
@@ -203,8 +198,6 @@ def main() -> None:
         ap.error("--two-segment needs --simulate-from")
     if args.two_segment_flight and not args.two_segment:
         ap.error("--two-segment-flight needs --two-segment")
-    if args.two_segment_first is not None and not args.two_segment:
-        ap.error("--two-segment-first needs --two-segment")
     _configure_gate(ap, args)
     JSON_DIR[:] = [args.json_dir] if args.json_dir else []
     sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})
@@ -246,7 +239,6 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--simulate-from", forward_selection, "SIMULATE_FROM_S", args.simulate_from),
             ("--two-segment", forward_selection, "TWO_SEGMENT", True if args.two_segment else None),
             ("--two-segment-flight", forward_selection, "TWO_SEGMENT_FLIGHT", True if args.two_segment_flight else None),
-            ("--two-segment-first", forward_selection, "TWO_SEGMENT_FIRST_S", args.two_segment_first),
             ("--angle-terms", model, "ANGLE_TERMS", tuple(args.angle_terms.split(",")) if args.angle_terms else None),
             ("--energy-pairs", forward_selection, "ENERGY_PAIRS", True if args.energy_pairs else None),
             ("--accept-step", forward_selection, "VELOCITY_FIT_ACCEPT", True if args.accept_step else None),

@@ -24,13 +24,11 @@ sub-options measured and not adopted, were removed in session 23; they run at co
 column then reads ``from D``). ``--two-segment`` (session 23, with ``--simulate-from``):
 ``forward_selection.TWO_SEGMENT`` too (the touchdown run compared before the start sample, the late run from it; the
 column reads ``2seg D``); ``--two-segment-flight``: ``forward_selection.TWO_SEGMENT_FLIGHT`` too (a run from the
-touchdown that takes off before the start sample compared as in flight up to it); ``--two-segment-first D1`` (session
-24): ``forward_selection.TWO_SEGMENT_FIRST_S`` = D1 too (the touchdown run compared over its first D1 s only, the
-samples from there to the start not compared; the column reads ``2seg D1/D``).
+touchdown that takes off before the start sample compared as in flight up to it).
 
 Usage: .venv/bin/python bench/discovery_stance_terms.py REC.mcap [--touchdown-velocity-fit 0.06] [--stances 5,6,8]
        [--discover] [--accept-step] [--fit-only]
-       [--simulate-from 0.06 [--two-segment [--two-segment-flight] [--two-segment-first 0.02]]]
+       [--simulate-from 0.06 [--two-segment]]
 """
 
 from __future__ import annotations
@@ -59,17 +57,12 @@ def main() -> None:
                     help="with --simulate-from: forward_selection.TWO_SEGMENT = True (session 23)")
     ap.add_argument("--two-segment-flight", action="store_true",
                     help="with --two-segment: forward_selection.TWO_SEGMENT_FLIGHT = True (session 23)")
-    ap.add_argument("--two-segment-first", type=float, default=None, metavar="D1",
-                    help="with --two-segment: forward_selection.TWO_SEGMENT_FIRST_S = D1 (session 24)")
     args = ap.parse_args()
     if args.two_segment and args.simulate_from is None:
         ap.error("--two-segment needs --simulate-from")
     if args.two_segment_flight and not args.two_segment:
         ap.error("--two-segment-flight needs --two-segment")
-    if args.two_segment_first is not None and not args.two_segment:
-        ap.error("--two-segment-first needs --two-segment")
     fs.TWO_SEGMENT_FLIGHT = args.two_segment_flight
-    fs.TWO_SEGMENT_FIRST_S = args.two_segment_first
     fs.VELOCITY_FIT_ACCEPT = args.accept_step  # module options: set before any evaluator forks its workers
     rec = load_recording(args.recording)
     trial = measure_trial(rec)
@@ -79,8 +72,7 @@ def main() -> None:
     means = {}
     with_fit = f"from {args.simulate_from}" if args.simulate_from is not None else args.touchdown_velocity_fit
     if args.two_segment:
-        first = "" if args.two_segment_first is None else f"{args.two_segment_first}/"
-        with_fit = f"2seg{'F' if args.two_segment_flight else ''} {first}{args.simulate_from}"
+        with_fit = f"2seg{'F' if args.two_segment_flight else ''} {args.simulate_from}"
     windows = (with_fit,) if args.fit_only else (None, with_fit)
 
     def configure(window) -> None:  # before the evaluator forks its workers, which read it

@@ -179,28 +179,6 @@ TWO_SEGMENT = False
 #: 5/8 exact and 0/6 nulls as the default, but the angle law named on 3/5 of the second generator's nulls (a law soft
 #: at touchdown avoids the bounce off the smeared touchdown state whatever the data): not the default.
 TWO_SEGMENT_FLIGHT = False
-#: Session 24 (a sub-option of :data:`TWO_SEGMENT`, off; docs/discovery.md "Session 24 (helper)"): the touchdown run is
-#: compared only over its samples before the first plate sample at or after this many seconds after touchdown
-#: (``k1`` = :func:`first_segment_index`, at most the start sample ``k``), the measured samples from ``k1`` to ``k`` not
-#: at all (for any model), the late run from ``k`` on as with :data:`TWO_SEGMENT`; the net work is the touchdown run's
-#: over ``[0, k1]`` plus the late run's, against the measured work over the same samples. Why: with
-#: :data:`TWO_SEGMENT_FLIGHT` a constant stiffness's bounce off the measured (smeared) touchdown state counts against it
-#: over the whole first segment whatever the data (the angle law named on 3 of 5 of the second generator's nulls,
-#: session 23), and without the fill the bounce hides the samples the bouncing run does not reach while a law that
-#: stays on the ground is compared over all of them (1201 lost). Choice (session 23's lead (a), not (b)): a first
-#: segment that every run from the touchdown state reaches, so every model is compared over the same samples, the
-#: bounce counted where the bouncing run really is in the air and nowhere else: 0.02 s = ``simulation.stance.MIN_STANCE_S``,
-#: the stance guard below which a run's take-off is not taken (a run that leaves the ground at once is sampled, with
-#: zero force, up to there); shorter values leave the impact's first ms only. A run that still ends before ``k1`` (a
-#: collapse, a failure) follows :data:`TWO_SEGMENT` / :data:`TWO_SEGMENT_FLIGHT` up to ``k1``. Lead (b) (the late run
-#: from the touchdown run's own state where it is on the ground) was not built: for a model that stays on the ground
-#: it is the run from the touchdown whose take-off the smeared velocities make wrong (session 22: 65-69 ms at
-#: 1.53 Hz), and a bouncing model keeps the late run from the measured state, so the models would be compared on
-#: unequal footing. None: the first segment up to ``k`` (session 23). Not the default (session 24, 0.02 with
-#: ``SIMULATE_FROM_S = 0.06``): of the second generator's nulls 0, 3, 4 (all three named by the flight fill) 0 and 3
-#: clean, but 4 still names the angle law, as ``SIMULATE_FROM_S = 0.06`` alone does (the late start's own false name,
-#: the hip's body mismatch absorbed by the angle law; the default names nothing there); effect cases not measured.
-TWO_SEGMENT_FIRST_S: float | None = None
 #: A loss and its source: (loss, source), identified in that order.
 PAIRS: tuple[tuple[str, str], ...] = (("surface_compliance", "active_push_off"), ("joint_damping", "active_push_off"))
 #: Scale of the fitted change of (toe vz m/s, q1..q4 rad/s) and its Gaussian prior SD (same units).
@@ -272,33 +250,13 @@ def measured_net_works_j(trial: MeasuredTrial, compared: bool = False) -> np.nda
     """:func:`measured_net_work_j` of every stance of ``trial`` (J), in order; with ``compared`` from each stance's
     :func:`compared_from` on, the samples a held-out simulation is compared over (the whole stance without
     :data:`SIMULATE_FROM_S` or with :data:`TWO_SEGMENT`)."""
-    return np.array([measured_compared_work_j(s) if compared else measured_net_work_j(s) for s in trial.stances])
-
-
-def measured_compared_work_j(s: MeasuredStance) -> float:
-    """The measured net work of stance ``s`` over the samples a held-out simulation's work is compared with: from
-    :func:`compared_from` on, or with :data:`TWO_SEGMENT_FIRST_S` over ``[0, k1]`` and from the start sample ``k`` on
-    (a model whose touchdown run ends before sample ``k1``, e.g. at the 20 ms stance guard, has its own gap's work
-    compared over the samples it has, :func:`_net_works_j`; this model-free figure is one interval longer then)."""
-    k1 = first_segment_index(s)
-    if k1 is None:
-        return measured_net_work_j(s, compared_from(s))
-    return measured_net_work_j(s, 0, k1 + 1) + measured_net_work_j(s, start_index(s))
+    return np.array([measured_net_work_j(s, compared_from(s) if compared else 0) for s in trial.stances])
 
 
 def compared_from(s: MeasuredStance) -> int:
     """The first sample of stance ``s`` a held-out simulation is compared from: :func:`start_index`, or 0 with
     :data:`TWO_SEGMENT` (its touchdown run is compared before the start)."""
     return 0 if TWO_SEGMENT and SIMULATE_FROM_S is not None else start_index(s)
-
-
-def first_segment_index(s: MeasuredStance) -> int | None:
-    """With :data:`TWO_SEGMENT_FIRST_S` (and :data:`TWO_SEGMENT`, :data:`SIMULATE_FROM_S`) the end ``k1`` of stance
-    ``s``'s first segment: its first plate sample at or after that many seconds since touchdown, at most
-    :func:`start_index`; None without it (the first segment up to the start sample)."""
-    if TWO_SEGMENT_FIRST_S is None or not TWO_SEGMENT or SIMULATE_FROM_S is None:
-        return None
-    return min(max(int(np.searchsorted(s.t_s, float(TWO_SEGMENT_FIRST_S) - 1e-9)), 1), start_index(s))
 
 
 def gap_scales(trial: MeasuredTrial) -> np.ndarray:
@@ -400,11 +358,9 @@ def two_segment_run(chain, law, ground, s: MeasuredStance, late: StanceSimulatio
     twice; the solver's first step then differs from a whole stance's, so its samples differ from the default run's
     at the tolerance's level, not to the bit). Raises RuntimeError when the integration fails."""
     k = start_index(s)
-    k1 = first_segment_index(s)  # TWO_SEGMENT_FIRST_S: integrated only to the first segment's end
-    end = k if k1 is None else k1
-    early = simulate_stance(chain, law, ground, touchdown_for_gap(chain, law, ground, s), t_max_s=float(s.t_s[end]),
-                            rtol=RTOL, atol=ATOL, sample_times_s=s.t_s[: end + 1])
-    return TwoSegmentRun(early, late, k, k1)
+    early = simulate_stance(chain, law, ground, touchdown_for_gap(chain, law, ground, s), t_max_s=float(s.t_s[k]),
+                            rtol=RTOL, atol=ATOL, sample_times_s=s.t_s[: k + 1])
+    return TwoSegmentRun(early, late, k)
 
 
 @dataclass
@@ -431,26 +387,17 @@ class TwoSegmentRun:
         From the measured state at sample ``k`` (:func:`late_start`), sampled from ``k`` on.
     k : int
         :func:`start_index` of the stance.
-    first : int or None
-        With :data:`TWO_SEGMENT_FIRST_S` the first segment's end ``k1`` (:func:`first_segment_index`): the touchdown
-        run is compared before it only, the samples from it to ``k`` not at all. None: ``k``.
     """
 
     early: StanceSimulation
     late: StanceSimulation
     k: int
-    first: int | None = None
-
-    @property
-    def k1(self) -> int:
-        """The end of the first segment: ``first``, or ``k`` without :data:`TWO_SEGMENT_FIRST_S`."""
-        return self.k if self.first is None else self.first
 
     @property
     def reached(self) -> int:
-        """How many of the samples before ``k1`` are compared from the touchdown run (``k1`` unless it ended before and
+        """How many of the samples before ``k`` are compared from the touchdown run (``k`` unless it ended before and
         not :data:`TWO_SEGMENT_FLIGHT`)."""
-        return self.k1 if TWO_SEGMENT_FLIGHT else min(len(self.early.t_s), self.k1)
+        return self.k if TWO_SEGMENT_FLIGHT else min(len(self.early.t_s), self.k)
 
     @property
     def measured_index(self) -> np.ndarray:
@@ -709,7 +656,7 @@ def _net_works_j(sim, s: MeasuredStance, n: int) -> tuple[float, float]:
     if isinstance(sim, TwoSegmentRun):
         # <= k + 1: its last sample is the late run's first unless it ended before (then with TWO_SEGMENT_FLIGHT the
         # measured work over the samples between counts too, the model's in flight is 0)
-        early = sim.k1 + 1 if TWO_SEGMENT_FLIGHT else len(sim.early.t_s)
+        early = sim.k + 1 if TWO_SEGMENT_FLIGHT else len(sim.early.t_s)
         late = _simulated_work_j(sim.late, None if TWO_SIDED_DURATION else n - sim.reached)
         measured = measured_net_work_j(s, 0, early) + measured_net_work_j(s, sim.k)
         return _simulated_work_j(sim.early, None, 0.0) + late, measured
