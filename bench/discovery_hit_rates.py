@@ -66,6 +66,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from scipy.stats import binomtest
+from two_segment_flags import add_two_segment_arguments, check_two_segment
 
 from hop_impedance.discovery.model import members
 from hop_impedance.discovery.workflow import discover
@@ -174,12 +175,7 @@ def main() -> None:
     ap.add_argument("--simulate-from", type=float, default=None, metavar="D",
                     help="forward_selection.SIMULATE_FROM_S = D: held-out stances simulated from the measured state "
                          "D s after touchdown (session 22's option)")
-    ap.add_argument("--two-segment", action="store_true",
-                    help="with --simulate-from: forward_selection.TWO_SEGMENT = True (session 23's option): the run "
-                         "from the touchdown compared before the start sample, the late run from it")
-    ap.add_argument("--two-segment-flight", action="store_true",
-                    help="with --two-segment: forward_selection.TWO_SEGMENT_FLIGHT = True (session 23's option): a run "
-                         "from the touchdown that takes off before the start sample compared as in flight up to it")
+    add_two_segment_arguments(ap, "--simulate-from")
     ap.add_argument("--angle-terms", default=None, metavar="TERMS",
                     help="model.ANGLE_TERMS, e.g. k1 (seed 000's Eq. 10) or k1,k2 (Eq. 3, the default)")
     ap.add_argument("--energy-pairs", action="store_true",
@@ -194,10 +190,7 @@ def main() -> None:
     ap.add_argument("--no-gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = False: the gate of sessions 8-16 (the total gap only)")
     args = ap.parse_args()
-    if args.two_segment and args.simulate_from is None:
-        ap.error("--two-segment needs --simulate-from")
-    if args.two_segment_flight and not args.two_segment:
-        ap.error("--two-segment-flight needs --two-segment")
+    check_two_segment(ap, args, "--simulate-from", args.simulate_from is not None)
     _configure_gate(ap, args)
     JSON_DIR[:] = [args.json_dir] if args.json_dir else []
     sizes = EffectSizes(**{k: float(v) for k, v in (kv.split("=") for kv in args.sizes.split(",") if kv)})

@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
+from two_segment_flags import add_two_segment_arguments, check_two_segment
 
 from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery.measurement import measure_trial
@@ -53,16 +54,9 @@ def main() -> None:
     ap.add_argument("--fit-only", action="store_true", help="only the runs with the fit")
     ap.add_argument("--simulate-from", type=float, default=None, metavar="D",
                     help="forward_selection.SIMULATE_FROM_S = D instead of the fit (session 22)")
-    ap.add_argument("--two-segment", action="store_true",
-                    help="with --simulate-from: forward_selection.TWO_SEGMENT = True (session 23)")
-    ap.add_argument("--two-segment-flight", action="store_true",
-                    help="with --two-segment: forward_selection.TWO_SEGMENT_FLIGHT = True (session 23)")
+    add_two_segment_arguments(ap, "--simulate-from")
     args = ap.parse_args()
-    if args.two_segment and args.simulate_from is None:
-        ap.error("--two-segment needs --simulate-from")
-    if args.two_segment_flight and not args.two_segment:
-        ap.error("--two-segment-flight needs --two-segment")
-    fs.TWO_SEGMENT_FLIGHT = args.two_segment_flight
+    check_two_segment(ap, args, "--simulate-from", args.simulate_from is not None)
     fs.VELOCITY_FIT_ACCEPT = args.accept_step  # module options: set before any evaluator forks its workers
     rec = load_recording(args.recording)
     trial = measure_trial(rec)

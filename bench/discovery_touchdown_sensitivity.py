@@ -66,6 +66,7 @@ from hop_impedance.simulation.stance import simulate_stance
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from discovery_truth_gap import fitted_law, outside_truth  # noqa: E402
+from two_segment_flags import add_two_segment_arguments, check_two_segment  # noqa: E402
 
 NULL = Effects(angle_dependent_stiffness=False, damping=False, push_off=False)
 def fitted_velocities(chain, law, ground, s) -> tuple:
@@ -182,19 +183,12 @@ def main() -> None:
                     help="the touchdown velocities fitted to the first W s (see the module docstring)")
     ap.add_argument("--start-after", type=float, nargs="+", default=None, metavar="D",
                     help="also from the measured state D s after the touchdown (see the module docstring)")
-    ap.add_argument("--two-segment", action="store_true",
-                    help="with --start-after: forward_selection.TWO_SEGMENT on the runs from D (session 23)")
-    ap.add_argument("--two-segment-flight", action="store_true",
-                    help="with --two-segment: forward_selection.TWO_SEGMENT_FLIGHT (session 23)")
+    add_two_segment_arguments(ap, "--start-after")
     ap.add_argument("--noisy", action="store_true", help="with the sensors' noise (with --fit-velocities/--start-after)")
     ap.add_argument("--outside", nargs="*", default=None,
                     help="outside recordings instead (with --fit-velocities/--start-after)")
     args = ap.parse_args()
-    if args.two_segment and not args.start_after:
-        ap.error("--two-segment needs --start-after")
-    if args.two_segment_flight and not args.two_segment:
-        ap.error("--two-segment-flight needs --two-segment")
-    fs.TWO_SEGMENT_FLIGHT = args.two_segment_flight
+    check_two_segment(ap, args, "--start-after", bool(args.start_after))
     if args.fit_velocities is not None or args.start_after:
         if args.outside is not None:
             for f in args.outside:
