@@ -519,10 +519,12 @@ def trunk_held_segment_rates(chain: Chain, q: np.ndarray, com_vx_m_s: float, dir
     """Touchdown rates of the ``"trunk_held"`` flight: the trunk balance has held the trunk in flight.
 
     The landing the energy-keeping flight would give, ``full`` = :func:`touchdown_segment_rates` (``direction``,
-    ``internal_energy_j``), is split at the trunk: the balance stops the trunk's part of it, so it takes out
-    ``loss = T(full) - T(full with the trunk's rate zero)`` (T the segment kinetic energy relative to the COM,
-    :func:`internal_kinetic_energy_j`; ``loss <= internal_energy_j``, and it may be negative when the trunk's and
-    the legs' motions are coupled against each other). The legs then land carrying ``internal_energy_j - loss``:
+    ``internal_energy_j``), is split at the trunk: the balance (a moment on the trunk's absolute pitch,
+    :class:`~hop_impedance.simulation.impedance_laws.TrunkBalance`) stops the trunk's pitch, which, done by an
+    impulse along q4, takes out ``loss = 0.5 full[3]^2 / (M^-1)[3, 3]`` (M the segments' mass matrix relative to
+    the COM, :func:`internal_mass_matrix`): the M-orthogonal split of T(full) into the motion with the trunk at
+    rest and the trunk's share, so ``0 <= loss <= internal_energy_j``. The legs then land carrying
+    ``internal_energy_j - loss``:
     rates ``base + s u`` with the trunk's entry zero in ``base`` and ``u`` (zero absolute trunk pitch rate at
     touchdown, so the balance's damper starts the stance at rest), ``base`` the minimum-norm leg rates that keep
     the toe still horizontally, ``u`` the leg part of ``direction`` less its toe-moving part, ``s >= 0`` for the
@@ -539,9 +541,8 @@ def trunk_held_segment_rates(chain: Chain, q: np.ndarray, com_vx_m_s: float, dir
     """
     q = np.asarray(q, float)
     full, not_placed_full = touchdown_segment_rates(chain, q, com_vx_m_s, direction, internal_energy_j)
-    legs_only = full.copy()
-    legs_only[TRUNK_SEGMENT] = 0.0
-    loss = internal_kinetic_energy_j(chain, q, full) - internal_kinetic_energy_j(chain, q, legs_only)
+    m_int = internal_mass_matrix(chain, q)
+    loss = 0.5 * full[TRUNK_SEGMENT] ** 2 / float(np.linalg.inv(m_int)[TRUNK_SEGMENT, TRUNK_SEGMENT])
     energy = internal_energy_j - not_placed_full - loss
     j0 = com_offset_jacobian(chain, q)[0].copy()
     j0[TRUNK_SEGMENT] = 0.0
@@ -549,13 +550,24 @@ def trunk_held_segment_rates(chain: Chain, q: np.ndarray, com_vx_m_s: float, dir
     d = np.asarray(direction, float).copy()
     d[TRUNK_SEGMENT] = 0.0
     u = d - j0 * (float(j0 @ d) / float(j0 @ j0))
-    m_int = internal_mass_matrix(chain, q)
     a, b, c = 0.5 * float(u @ m_int @ u), float(u @ m_int @ base), 0.5 * float(base @ m_int @ base)
     disc = b * b - 4.0 * a * (c - energy)
     if a <= 1e-12 or disc < 0.0 or (-b + np.sqrt(disc)) < 0.0:
         return base, float(loss), float(not_placed_full + energy - c)
     s = (-b + np.sqrt(disc)) / (2.0 * a)
     return base + s * u, float(loss), float(not_placed_full)
+
+
+def trunk_held_toe_correction(chain: Chain, q: np.ndarray, com_vx_m_s: float, rates: np.ndarray) -> np.ndarray:
+    """``rates`` (trunk entry zero) with the leg part along d(COM x - toe x)/dq set so the toe is still horizontally
+    in posture ``q`` at COM vx ``com_vx_m_s``: the ``"trunk_held"`` flight's touchdown rates computed in another
+    posture (the calibration's, for the first hop and the COM-offset probes) moved to ``q`` without giving the trunk
+    a rate (:func:`touchdown_state` then keeps them as they are)."""
+    j0 = com_offset_jacobian(chain, np.asarray(q, float))[0].copy()
+    j0[TRUNK_SEGMENT] = 0.0
+    r = np.asarray(rates, float).copy()
+    r[TRUNK_SEGMENT] = 0.0
+    return r + j0 * ((com_vx_m_s - float(j0 @ r)) / float(j0 @ j0))
 
 
 def flight_rates(chain: Chain, config: HoppingConfig, law: ImpedanceLaw, stance: StanceSimulation,
@@ -676,6 +688,8 @@ class _CalibrationHop:
         """
         config, period = self.config, 1.0 / self.config.freq_hz
         law = scale_push_off(config.law, scale)
+        if config.flight == "trunk_held" and rates is not None:
+            rates = trunk_held_toe_correction(self.chain, q, 0.0, rates)
         td = touchdown_state(self.chain, q, np.array([0.0, -speed]), 0.0, rates)
         st = simulate_stance(self.chain, law, config.surface, td, t_max_s=2.0 * period,
                              rtol=config.rtol * 100, atol=config.atol * 100,
@@ -839,6 +853,8 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
     for i in range(config.n_hops):
         surface = config.surface_for_hop(i)
         law = scale_push_off(config.law, _hop_push_scale(config, cal, speed, rng))
+        if config.flight == "trunk_held" and i == 0 and config.first_touchdown is None:
+            rates = trunk_held_toe_correction(chain, q_td, vx_com, rates)  # the calibration's, in its posture
         td = touchdown_state(chain, q_td, np.array([vx_com, -speed]), x_toe, rates)
         st = simulate_stance(chain, law, surface, td, t_max_s=2.0 * period, rtol=config.rtol, atol=config.atol,
                              friction_coefficient=config.friction_coefficient, trunk_balance=config.trunk_balance)
