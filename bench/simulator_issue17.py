@@ -430,12 +430,14 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--push-weights", metavar="A,K,H",
                         help="the push-off's amplitude per joint in units of scenarios.PUSH_OFF_BASE_NM instead of 1,0.6,0.3 "
                              "(a negative knee share: the gastrocnemius' knee flexor moment)")
-    parser.add_argument("--flight", choices=("prescribed", "energy_keeping"), default=None,
+    parser.add_argument("--flight", choices=("prescribed", "energy_keeping", "trunk_held"), default=None,
                         help="the flight model (hopping_trial.py): energy_keeping returns the segments' motion and the "
                              "springs' energy at take-off at the next touchdown instead of discarding them (issue 17: "
-                             "the push-off only replaces real losses); default the options' own (prescribed)")
+                             "the push-off only replaces real losses); trunk_held the same with the trunk balance holding "
+                             "the trunk in flight (zero trunk rate at touchdown, its share a reported flight loss); "
+                             "default the options' own (prescribed)")
     parser.add_argument("--landing", choices=("reversed", "prescribed"), default=None,
-                        help="with --flight energy_keeping: land along the take-off rates reversed (default) or along "
+                        help="with --flight energy_keeping or trunk_held: land along the take-off rates reversed (default) or along "
                              "the prescribed flight's own landing motion (HoppingConfig.landing; same energy)")
     parser.add_argument("--push-off-gain", type=float, default=None, metavar="G",
                         help="the hop-by-hop push-off controller's gain as a fraction of its deadbeat one "

@@ -509,7 +509,7 @@ def main() -> None:
     parser.add_argument("--write", action="store_true",
                         help="write docs/simulator_realism.md and the seed table between the README's markers")
     parser.add_argument("--trunk", action="store_true", help="with the trunk-balance moment (scenarios.TRUNK_BALANCE)")
-    parser.add_argument("--flight", default="prescribed", choices=("prescribed", "energy_keeping"))
+    parser.add_argument("--flight", default="prescribed", choices=("prescribed", "energy_keeping", "trunk_held"))
     parser.add_argument("--posture", default=None,
                         help="touchdown ankle rho1, knee flexion, hip flexion (rad), e.g. 1.6,0.8,0.5; "
                              "default scenarios.DEFAULT_TOUCHDOWN_RHO")
@@ -524,7 +524,7 @@ def main() -> None:
                         help="push-off onset, duration as fractions of the passive stance, e.g. 0.4,0.4 (after --seed-like; "
                              "with --hopper: instead of the preset's 0.6,0.8, not with --write)")
     parser.add_argument("--landing", choices=("reversed", "prescribed"), default=None,
-                        help="with --hopper --flight energy_keeping: land along the take-off rates reversed (default) or "
+                        help="with --hopper --flight energy_keeping or trunk_held: land along the take-off rates reversed (default) or "
                              "along the prescribed flight's own landing motion (simulator_issue17.py's flag); not with --write")
     parser.add_argument("--push-off-gain", type=float, default=None, metavar="G",
                         help="with --hopper: the hop-by-hop push-off controller's gain as a fraction of its deadbeat one "

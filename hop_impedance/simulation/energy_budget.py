@@ -19,7 +19,9 @@ moments, flexion-positive angles):
 
 :func:`trial_energy_budget` adds ``flight_j`` = E(next touchdown) - E(take-off) + (springs returned in
 flight, :func:`~hop_impedance.simulation.hopping_trial.returned_spring_energy_j`, energy-keeping flight
-only): what flight discards (negative) or keeps (0).
+only): what flight discards (negative) or keeps (0). With the ``"trunk_held"`` flight it also adds
+``flight_balance_loss_j``, the energy the trunk balance took out in that flight
+(``HoppingTrial.flight_balance_loss_j``), and then ``flight_j`` = -``flight_balance_loss_j``.
 
 Integrals are trapezoids on a ``dt_s`` grid of the stance's dense output (default 0.2 ms: residual
 below 0.1 J on the default trials).
@@ -101,8 +103,11 @@ def trial_energy_budget(trial, dt_s: float = DEFAULT_DT_S) -> list[dict]:
     rows = [stance_energy_budget(trial.chain, rec, dt_s) for rec in trial.stances]
     for row, rec, nxt in zip(rows, trial.stances, trial.stances[1:]):
         returned = 0.0
-        if trial.config.flight == "energy_keeping":
+        if trial.config.flight in ("energy_keeping", "trunk_held"):
             rho_next = joint_angles(nxt.touchdown.g[2:][None], trial.chain.alpha_rad)[0]
             returned = returned_spring_energy_j(rec.law, rec.stance.ref, rec.stance.rho_rad[-1], rho_next)
         row["flight_j"] = _energy(trial.chain, nxt.touchdown.g, nxt.touchdown.gd) - row["e_takeoff_j"] - returned
+    if trial.config.flight == "trunk_held":  # the balance's loss in flight, beside the push-off's work (session 24)
+        for row, loss in zip(rows, trial.flight_balance_loss_j):
+            row["flight_balance_loss_j"] = float(loss)
     return rows

@@ -30,6 +30,14 @@ quantity the analysis uses depends on it.
   the hop-to-hop map and its periodic orbits: :mod:`~hop_impedance.simulation.periodic_hop`). The seed-like
   hopper's lossless counterpart keeps its hop with a conservative landing feedback (:class:`LandingFeedback`,
   scenarios.seed_like_lossless_config, test/simulation/test_sim_lossless_seed_like.py).
+- ``"trunk_held"`` (session 24, off by default): the energy-keeping flight with the
+  trunk balance holding the trunk in flight (:func:`trunk_held_segment_rates`): the
+  trunk (q4) lands with zero absolute pitch rate, the legs (q1..q3) carry the rest
+  of the carried energy along the landing direction's leg part, and the trunk's
+  share of the landing motion is taken out by the balance in flight, reported per
+  hop (``HoppingTrial.flight_balance_loss_j``; the energy budget's
+  ``flight_balance_loss_j``), so energy at touchdown = energy at take-off - that
+  loss exactly. The calibration's rounds use the same flight.
 
 Touchdown and hop sequencing
 ----------------------------
@@ -84,7 +92,9 @@ from hop_impedance.simulation.stance import (
 #: A contact shorter than this is a bounce of the foot, not a hop (s).
 MIN_HOP_STANCE_S = 0.05
 #: Flight models of :class:`HoppingConfig` (module docstring).
-FLIGHT_MODELS = ("prescribed", "energy_keeping")
+FLIGHT_MODELS = ("prescribed", "energy_keeping", "trunk_held")
+#: The flight models whose touchdown rates carry the take-off's segment energy (all of it, or less the trunk's share).
+ENERGY_KEEPING_FLIGHTS = ("energy_keeping", "trunk_held")
 #: Landing directions of the energy-keeping flight (:attr:`HoppingConfig.landing`).
 LANDINGS = ("reversed", "prescribed")
 
@@ -170,7 +180,9 @@ class HoppingConfig:
     flight : {"prescribed", "energy_keeping"}
         ``"prescribed"``: segments brought to rest at the next touchdown (the energy of segment
         motion at take-off is discarded). ``"energy_keeping"``: the touchdown segment rates carry
-        that energy (:func:`flight_segment_rates`); module docstring.
+        that energy (:func:`flight_segment_rates`); module docstring. ``"trunk_held"``: the same with the
+        trunk balance holding the trunk in flight (:func:`trunk_held_segment_rates`): zero absolute trunk rate
+        at touchdown, the trunk's share of the landing motion an explicit flight loss (module docstring).
     landing_rates_rad_s : 4 floats or None
         Energy-keeping flight only: land along these segment rates (rad/s; their direction, the
         magnitude carries the flight's energy) instead of the take-off rates reversed: a practised
@@ -424,6 +436,9 @@ class HoppingTrial:
     calibration: HopCalibration | None
     stop_reason: str = ""
     notes: list[str] = field(default_factory=list)
+    #: ``"trunk_held"`` flight only: energy the trunk balance took out in the flight after each stance (J; one
+    #: entry per flight that ends in a touchdown; empty for the other flights).
+    flight_balance_loss_j: list[float] = field(default_factory=list)
 
     def sample(self, t_s: np.ndarray) -> dict[str, np.ndarray]:
         """True state at absolute times ``t_s`` (s), shape (N,).
@@ -493,6 +508,83 @@ def flight_segment_rates(chain: Chain, law: ImpedanceLaw, stance: StanceSimulati
     direction = -gd[2:] if landing_rates_rad_s is None else np.asarray(landing_rates_rad_s, float)
     rates, not_placed = touchdown_segment_rates(chain, q_next, com_vx_m_s, direction, carried)
     return rates, carried, not_placed
+
+
+#: Index of the trunk (HAT) among the segment angles q1..q4.
+TRUNK_SEGMENT = 3
+
+
+def trunk_held_segment_rates(chain: Chain, q: np.ndarray, com_vx_m_s: float, direction: np.ndarray,
+                             internal_energy_j: float) -> tuple[np.ndarray, float, float]:
+    """Touchdown rates of the ``"trunk_held"`` flight: the trunk balance has held the trunk in flight.
+
+    The landing the energy-keeping flight would give, ``full`` = :func:`touchdown_segment_rates` (``direction``,
+    ``internal_energy_j``), is split at the trunk: the balance (a moment on the trunk's absolute pitch,
+    :class:`~hop_impedance.simulation.impedance_laws.TrunkBalance`) stops the trunk's pitch, which, done by an
+    impulse along q4, takes out ``loss = 0.5 full[3]^2 / (M^-1)[3, 3]`` (M the segments' mass matrix relative to
+    the COM, :func:`internal_mass_matrix`): the M-orthogonal split of T(full) into the motion with the trunk at
+    rest and the trunk's share, so ``0 <= loss <= internal_energy_j``. The legs then land carrying
+    ``internal_energy_j - loss``:
+    rates ``base + s u`` with the trunk's entry zero in ``base`` and ``u`` (zero absolute trunk pitch rate at
+    touchdown, so the balance's damper starts the stance at rest), ``base`` the minimum-norm leg rates that keep
+    the toe still horizontally, ``u`` the leg part of ``direction`` less its toe-moving part, ``s >= 0`` for the
+    energy (as :func:`touchdown_segment_rates` does on all four segments).
+
+    Returns
+    -------
+    rates : ndarray, shape (4,)
+        Segment angular velocities (rad/s); ``rates[3]`` is zero.
+    loss_j : float
+        Energy the balance took out in flight (J).
+    not_placed_j : float
+        Energy that could not be given to the legs (J; :func:`touchdown_segment_rates`'s), 0 normally.
+    """
+    q = np.asarray(q, float)
+    full, not_placed_full = touchdown_segment_rates(chain, q, com_vx_m_s, direction, internal_energy_j)
+    m_int = internal_mass_matrix(chain, q)
+    loss = 0.5 * full[TRUNK_SEGMENT] ** 2 / float(np.linalg.inv(m_int)[TRUNK_SEGMENT, TRUNK_SEGMENT])
+    energy = internal_energy_j - not_placed_full - loss
+    j0 = com_offset_jacobian(chain, q)[0].copy()
+    j0[TRUNK_SEGMENT] = 0.0
+    base = j0 * (com_vx_m_s / float(j0 @ j0))
+    d = np.asarray(direction, float).copy()
+    d[TRUNK_SEGMENT] = 0.0
+    u = d - j0 * (float(j0 @ d) / float(j0 @ j0))
+    a, b, c = 0.5 * float(u @ m_int @ u), float(u @ m_int @ base), 0.5 * float(base @ m_int @ base)
+    disc = b * b - 4.0 * a * (c - energy)
+    if a <= 1e-12 or disc < 0.0 or (-b + np.sqrt(disc)) < 0.0:
+        return base, float(loss), float(not_placed_full + energy - c)
+    s = (-b + np.sqrt(disc)) / (2.0 * a)
+    return base + s * u, float(loss), float(not_placed_full)
+
+
+def trunk_held_toe_correction(chain: Chain, q: np.ndarray, com_vx_m_s: float, rates: np.ndarray) -> np.ndarray:
+    """``rates`` (trunk entry zero) with the leg part along d(COM x - toe x)/dq set so the toe is still horizontally
+    in posture ``q`` at COM vx ``com_vx_m_s``: the ``"trunk_held"`` flight's touchdown rates computed in another
+    posture (the calibration's, for the first hop and the COM-offset probes) moved to ``q`` without giving the trunk
+    a rate (:func:`touchdown_state` then keeps them as they are)."""
+    j0 = com_offset_jacobian(chain, np.asarray(q, float))[0].copy()
+    j0[TRUNK_SEGMENT] = 0.0
+    r = np.asarray(rates, float).copy()
+    r[TRUNK_SEGMENT] = 0.0
+    return r + j0 * ((com_vx_m_s - float(j0 @ r)) / float(j0 @ j0))
+
+
+def flight_rates(chain: Chain, config: HoppingConfig, law: ImpedanceLaw, stance: StanceSimulation,
+                 q_next: np.ndarray, com_vx_m_s: float, direction=None) -> tuple[np.ndarray, float, float]:
+    """(touchdown rates rad/s, balance loss J, energy not placed J) of ``config.flight``'s energy-keeping flights:
+    :func:`flight_segment_rates` (``"energy_keeping"``, loss 0) or the same carried energy landed with the trunk
+    held (``"trunk_held"``, :func:`trunk_held_segment_rates`), along ``direction`` (None: the take-off rates
+    reversed)."""
+    if config.flight != "trunk_held":
+        rates, _, not_placed = flight_segment_rates(chain, law, stance, q_next, com_vx_m_s, direction)
+        return rates, 0.0, not_placed
+    g, gd = stance.g[-1], stance.gd[-1]
+    rho_next = joint_angles(np.asarray(q_next, float)[None], chain.alpha_rad)[0]
+    carried = internal_kinetic_energy_j(chain, g[2:], gd[2:]) + returned_spring_energy_j(
+        law, stance.ref, stance.rho_rad[-1], rho_next)
+    d = -gd[2:] if direction is None else np.asarray(direction, float)
+    return trunk_held_segment_rates(chain, q_next, com_vx_m_s, d, carried)
 
 
 def prescribed_landing_direction(chain: Chain, stance: StanceSimulation, q_next: np.ndarray,
@@ -596,6 +688,8 @@ class _CalibrationHop:
         """
         config, period = self.config, 1.0 / self.config.freq_hz
         law = scale_push_off(config.law, scale)
+        if config.flight == "trunk_held" and rates is not None:
+            rates = trunk_held_toe_correction(self.chain, q, 0.0, rates)
         td = touchdown_state(self.chain, q, np.array([0.0, -speed]), 0.0, rates)
         st = simulate_stance(self.chain, law, config.surface, td, t_max_s=2.0 * period,
                              rtol=config.rtol * 100, atol=config.atol * 100,
@@ -684,7 +778,7 @@ def _calibrate_touchdown_rates(hop: _CalibrationHop, has_push: bool,
     """
     chain, q_td = hop.chain, hop.q_td
     scale, rates = 1.0, None
-    rounds = CALIBRATION_FLIGHT_ROUNDS if hop.config.flight == "energy_keeping" else 1
+    rounds = CALIBRATION_FLIGHT_ROUNDS if hop.config.flight in ENERGY_KEEPING_FLIGHTS else 1
     # (speed, scale, rates) of the last round whose solution hops
     accepted: tuple[float, float, np.ndarray | None] | None = None
     for round_ in range(rounds):
@@ -700,7 +794,7 @@ def _calibrate_touchdown_rates(hop: _CalibrationHop, has_push: bool,
         if round_ < rounds - 1:
             direction = None if hop.config.landing == "reversed" else landing_direction(
                 chain, hop.config, st, q_td, 0.0, t_f)
-            rates = flight_segment_rates(chain, law, st, q_td, 0.0, direction)[0]
+            rates = flight_rates(chain, hop.config, law, st, q_td, 0.0, direction)[0]
     if accepted is not None:
         speed, scale, rates = accepted
     return speed, scale, rates
@@ -755,9 +849,12 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
         flights = [_lead_in_flight(chain, config, q_td, rates, speed, vx_com)]
     stop = ""
     t_end = config.lead_in_s
+    balance_losses: list[float] = []
     for i in range(config.n_hops):
         surface = config.surface_for_hop(i)
         law = scale_push_off(config.law, _hop_push_scale(config, cal, speed, rng))
+        if config.flight == "trunk_held" and i == 0 and config.first_touchdown is None:
+            rates = trunk_held_toe_correction(chain, q_td, vx_com, rates)  # the calibration's, in its posture
         td = touchdown_state(chain, q_td, np.array([vx_com, -speed]), x_toe, rates)
         st = simulate_stance(chain, law, surface, td, t_max_s=2.0 * period, rtol=config.rtol, atol=config.atol,
                              friction_coefficient=config.friction_coefficient, trunk_balance=config.trunk_balance)
@@ -778,10 +875,12 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
         if nxt.not_placed_j > 1e-9:
             notes.append(f"flight after hop {i}: {nxt.not_placed_j:.3f} J of segment energy could not be placed")
         flights.append(nxt.flight)
+        if config.flight == "trunk_held" and i < config.n_hops - 1:
+            balance_losses.append(nxt.balance_loss_j)
         x_toe, vx_com, speed, q_td, rates = nxt.x_toe_m, nxt.com_vx_m_s, nxt.speed_m_s, q_next, nxt.rates
         t_td = t_end + nxt.flight.duration_s
         t_end = t_td
-    return HoppingTrial(config, chain, stances, flights, t_end, cal, stop, notes)
+    return HoppingTrial(config, chain, stances, flights, t_end, cal, stop, notes, balance_losses)
 
 
 def given_start_calibration(config: HoppingConfig) -> HopCalibration:
@@ -883,6 +982,7 @@ class _NextTouchdown:
     speed_m_s: float
     rates: np.ndarray | None
     not_placed_j: float
+    balance_loss_j: float = 0.0
 
 
 def _flight_to_next_touchdown(chain: Chain, config: HoppingConfig, law: ImpedanceLaw, st: StanceSimulation,
@@ -898,10 +998,11 @@ def _flight_to_next_touchdown(chain: Chain, config: HoppingConfig, law: Impedanc
     t_f = flight_time_s(chain, com_to[1], v_to[1], q_next)
     com_next = com_to + v_to * t_f - np.array([0.0, 0.5 * g_acc * t_f**2])
     v_next = v_to - np.array([0.0, g_acc * t_f])
-    rates, not_placed = None, 0.0
-    if config.flight == "energy_keeping":
-        rates, _, not_placed = flight_segment_rates(
-            chain, law, st, q_next, float(v_next[0]), landing_direction(chain, config, st, q_next, float(v_next[0]), t_f))
+    rates, not_placed, loss = None, 0.0, 0.0
+    if config.flight in ENERGY_KEEPING_FLIGHTS:
+        rates, loss, not_placed = flight_rates(
+            chain, config, law, st, q_next, float(v_next[0]),
+            landing_direction(chain, config, st, q_next, float(v_next[0]), t_f))
     td_next = touchdown_state(chain, q_next, v_next, 0.0, rates)
     angles = BPoly.from_derivatives(
         [0.0, t_f],
@@ -911,7 +1012,7 @@ def _flight_to_next_touchdown(chain: Chain, config: HoppingConfig, law: Impedanc
         t_f = max(v_to[1] / g_acc, 0.4 * t_f)
     x_toe = float(com_next[0] - body_com(chain, np.r_[0.0, 0.0, q_next])[0])
     return _NextTouchdown(Flight(t_takeoff_s, t_f, com_to, v_to, angles, g_acc), x_toe, float(v_next[0]),
-                          float(-v_next[1]), rates, not_placed)
+                          float(-v_next[1]), rates, not_placed, loss)
 
 
 def leg_stiffness_n_per_m(chain: Chain, stance: StanceSimulation) -> tuple[float, float, float]:

@@ -119,7 +119,9 @@ def _flight_model(cfg) -> str:
         return "COM ballistic, segment angles prescribed (quintic) to rest at touchdown; force plate zero"
     return ("COM ballistic, segment angles quintic to touchdown rates that keep the take-off's segment kinetic energy "
             "plus the springs' returned energy; force plate zero"
-            + ("; landing along the prescribed flight's landing motion" if cfg.landing == "prescribed" else ""))
+            + ("; landing along the prescribed flight's landing motion" if cfg.landing == "prescribed" else "")
+            + ("; the trunk balance holds the trunk in flight (zero trunk pitch rate at touchdown, the trunk's share of "
+               "the landing motion lost: stances' energy_j.flight_balance_loss_j)" if cfg.flight == "trunk_held" else ""))
 
 
 def trial_truth(

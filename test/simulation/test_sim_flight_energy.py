@@ -13,6 +13,7 @@ from hop_impedance.simulation.dynamics import (
     chain_from_body_model,
     com_offset_jacobian,
     internal_kinetic_energy_j,
+    internal_mass_matrix,
     mechanical_energy_j,
 )
 from hop_impedance.simulation.ground import HARD, lossless
@@ -181,3 +182,58 @@ def test_landing_along_the_prescribed_flights_motion_keeps_the_energy_and_its_di
         assert cosine > 1.0 - 1e-9  # parallel, same sense
     # ...and it is another landing than the reversed take-off rates'.
     assert not np.allclose(tr.stances[1].touchdown.gd, reversed_tr.stances[1].touchdown.gd, atol=1e-3)
+
+
+def test_trunk_held_rates_stop_the_trunk_and_report_its_share():
+    """hopping_trial.trunk_held_segment_rates (session 24): zero trunk rate, the toe still horizontally, the legs
+    carrying the energy less the trunk's share of the energy-keeping landing, that share the reported loss."""
+    from hop_impedance.simulation.hopping_trial import trunk_held_segment_rates
+
+    q = touchdown_posture(CHAIN, np.array(DEFAULT_TOUCHDOWN_RHO))
+    direction = np.array([3.0, -4.0, 6.0, -1.0])
+    for vx, energy in ((0.0, 7.5), (0.08, 2.0), (-0.05, 20.0)):
+        rates, loss, not_placed = trunk_held_segment_rates(CHAIN, q, vx, direction, energy)
+        full, _ = touchdown_segment_rates(CHAIN, q, vx, direction, energy)
+        # the trunk's share: what stopping the trunk by an impulse along q4 takes out (M-orthogonal split)
+        m_inv = np.linalg.inv(internal_mass_matrix(CHAIN, q))
+        stopped = full - m_inv[:, 3] * (full[3] / m_inv[3, 3])
+        assert abs(stopped[3]) < 1e-12
+        assert not_placed == 0.0 and rates[3] == 0.0 and 0.0 < loss < energy
+        assert loss == pytest.approx(energy - internal_kinetic_energy_j(CHAIN, q, stopped), rel=1e-10)
+        assert internal_kinetic_energy_j(CHAIN, q, rates) == pytest.approx(energy - loss, rel=1e-10)
+        assert abs(vx - com_offset_jacobian(CHAIN, q)[0] @ rates) < 1e-12  # the toe still horizontally
+        if vx == 0.0:  # no toe correction: the legs move along the direction's leg part less its toe-moving part
+            j0 = com_offset_jacobian(CHAIN, q)[0].copy()
+            j0[3] = 0.0
+            leg_dir = np.r_[direction[:3], 0.0]
+            u = leg_dir - j0 * (float(j0 @ leg_dir) / float(j0 @ j0))
+            assert float(rates @ u) / (np.linalg.norm(rates) * np.linalg.norm(u)) > 1.0 - 1e-12
+
+
+def test_trunk_held_flight_loses_exactly_the_reported_balance_loss():
+    """``flight="trunk_held"``: the trunk lands without pitching (zero absolute trunk rate at every touchdown, the
+    calibrated one included), and energy at touchdown = energy at the previous take-off - the balance's reported
+    flight loss (1e-6 relative), reported in the trial and in the energy budget beside the push-off's work."""
+    from hop_impedance.simulation.energy_budget import trial_energy_budget
+    from hop_impedance.simulation.scenarios import TRUNK_BALANCE
+
+    chain, cfg = hopping_config(2.2, "hard", 3, variability=False, trunk_balance=TRUNK_BALANCE,
+                                flight="trunk_held", landing="prescribed")
+    tr = simulate_hopping(chain, cfg, seed=1)
+    assert tr.stop_reason == "" and len(tr.stances) == 3
+    assert tr.calibration.touchdown_rates_rad_s[3] == 0.0
+    assert len(tr.flight_balance_loss_j) == 2
+    budget = trial_energy_budget(tr)
+    for rec, nxt, loss, row in zip(tr.stances[:-1], tr.stances[1:], tr.flight_balance_loss_j, budget):
+        st, springs = rec.stance, rec.law.part(Eq3Law)
+
+        def energy(g, gd, rho, springs=springs, ref=st.ref):
+            return sum(mechanical_energy_j(chain, g, gd)) + float(springs.elastic_energy_j(rho, ref))
+
+        e_takeoff = energy(st.g[-1], st.gd[-1], st.rho_rad[-1])
+        e_touchdown = energy(nxt.touchdown.g, nxt.touchdown.gd, nxt.stance.rho_rad[0])
+        assert abs(e_touchdown - (e_takeoff - loss)) / e_takeoff < 1e-6, (e_takeoff, e_touchdown, loss)
+        assert abs(nxt.touchdown.gd[5]) < 1e-12  # the trunk's absolute pitch rate at touchdown
+        assert internal_kinetic_energy_j(chain, nxt.touchdown.g[2:], nxt.touchdown.gd[2:]) > 0.1  # the legs carry some
+        assert loss > 1e-3 and row["flight_balance_loss_j"] == loss and "push_off_j" in row
+    assert abs(tr.stances[0].touchdown.gd[5]) < 1e-12
