@@ -437,8 +437,8 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
                              "the trunk in flight (zero trunk rate at touchdown, its share a reported flight loss); "
                              "default the options' own (prescribed)")
     parser.add_argument("--landing", choices=("reversed", "prescribed"), default=None,
-                        help="with --flight energy_keeping or trunk_held: land along the take-off rates reversed (default) or along "
-                             "the prescribed flight's own landing motion (HoppingConfig.landing; same energy)")
+                        help="with --flight energy_keeping or trunk_held: land along the take-off rates reversed (default) or "
+                             "along the prescribed flight's own landing motion (HoppingConfig.landing; same energy)")
     parser.add_argument("--push-off-gain", type=float, default=None, metavar="G",
                         help="the hop-by-hop push-off controller's gain as a fraction of its deadbeat one "
                              "(HoppingConfig.push_off_gain; default 1)")

@@ -524,8 +524,9 @@ def main() -> None:
                         help="push-off onset, duration as fractions of the passive stance, e.g. 0.4,0.4 (after --seed-like; "
                              "with --hopper: instead of the preset's 0.6,0.8, not with --write)")
     parser.add_argument("--landing", choices=("reversed", "prescribed"), default=None,
-                        help="with --hopper --flight energy_keeping or trunk_held: land along the take-off rates reversed (default) or "
-                             "along the prescribed flight's own landing motion (simulator_issue17.py's flag); not with --write")
+                        help="with --hopper --flight energy_keeping or trunk_held: land along the take-off rates reversed "
+                             "(default) or along the prescribed flight's own landing motion (simulator_issue17.py's flag); "
+                             "not with --write")
     parser.add_argument("--push-off-gain", type=float, default=None, metavar="G",
                         help="with --hopper: the hop-by-hop push-off controller's gain as a fraction of its deadbeat one "
                              "(simulator_issue17.py's flag; default 1); not with --write")

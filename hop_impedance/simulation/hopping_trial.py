@@ -177,7 +177,7 @@ class HoppingConfig:
         Coulomb friction of the sole (stance.py docstring); None = never slides.
     trunk_balance : TrunkBalance or None
         Postural moment at the hip holding the trunk at its touchdown inclination.
-    flight : {"prescribed", "energy_keeping"}
+    flight : {"prescribed", "energy_keeping", "trunk_held"}
         ``"prescribed"``: segments brought to rest at the next touchdown (the energy of segment
         motion at take-off is discarded). ``"energy_keeping"``: the touchdown segment rates carry
         that energy (:func:`flight_segment_rates`); module docstring. ``"trunk_held"``: the same with the
