@@ -436,8 +436,9 @@ class HoppingTrial:
     calibration: HopCalibration | None
     stop_reason: str = ""
     notes: list[str] = field(default_factory=list)
-    #: ``"trunk_held"`` flight only: energy the trunk balance took out in the flight after each stance (J; one
-    #: entry per flight that ends in a touchdown; empty for the other flights).
+    #: Energy the trunk balance took out in the flight after each stance (J; one entry per flight that ends in a
+    #: touchdown, the last hop's flight ending at its apex has none; > 0 with the ``"trunk_held"`` flight only, 0 for
+    #: the other flights).
     flight_balance_loss_j: list[float] = field(default_factory=list)
 
     def sample(self, t_s: np.ndarray) -> dict[str, np.ndarray]:
@@ -839,7 +840,6 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
     td_rates = np.array(cal.touchdown_rates_rad_s, float)
     rates: np.ndarray | None = td_rates
     speed = cal.speed_m_s
-    t_td = config.lead_in_s
     flights = [_lead_in_flight(chain, config, q_td, td_rates, speed)]
     stances: list[StanceRecord] = []
     x_toe, vx_com = 0.0, 0.0
@@ -847,14 +847,14 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
         speed, vx_com, ahead, *first_rates = (float(v) for v in config.first_touchdown)
         q_td, rates = touchdown_posture(chain, rho_nom, ahead), np.array(first_rates)
         flights = [_lead_in_flight(chain, config, q_td, rates, speed, vx_com)]
+    elif config.flight == "trunk_held":  # the calibration's rates moved to the trial's posture, the trunk at rest
+        rates = trunk_held_toe_correction(chain, q_td, vx_com, td_rates)
     stop = ""
-    t_end = config.lead_in_s
+    t_td = t_end = config.lead_in_s
     balance_losses: list[float] = []
     for i in range(config.n_hops):
         surface = config.surface_for_hop(i)
         law = scale_push_off(config.law, _hop_push_scale(config, cal, speed, rng))
-        if config.flight == "trunk_held" and i == 0 and config.first_touchdown is None:
-            rates = trunk_held_toe_correction(chain, q_td, vx_com, rates)  # the calibration's, in its posture
         td = touchdown_state(chain, q_td, np.array([vx_com, -speed]), x_toe, rates)
         st = simulate_stance(chain, law, surface, td, t_max_s=2.0 * period, rtol=config.rtol, atol=config.atol,
                              friction_coefficient=config.friction_coefficient, trunk_balance=config.trunk_balance)
@@ -875,12 +875,10 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
         if nxt.not_placed_j > 1e-9:
             notes.append(f"flight after hop {i}: {nxt.not_placed_j:.3f} J of segment energy could not be placed")
         flights.append(nxt.flight)
-        if config.flight == "trunk_held" and i < config.n_hops - 1:
-            balance_losses.append(nxt.balance_loss_j)
+        balance_losses.append(nxt.balance_loss_j)
         x_toe, vx_com, speed, q_td, rates = nxt.x_toe_m, nxt.com_vx_m_s, nxt.speed_m_s, q_next, nxt.rates
-        t_td = t_end + nxt.flight.duration_s
-        t_end = t_td
-    return HoppingTrial(config, chain, stances, flights, t_end, cal, stop, notes, balance_losses)
+        t_td = t_end = t_end + nxt.flight.duration_s
+    return HoppingTrial(config, chain, stances, flights, t_end, cal, stop, notes, balance_losses[: config.n_hops - 1])
 
 
 def given_start_calibration(config: HoppingConfig) -> HopCalibration:
