@@ -98,12 +98,12 @@ def stance_energy_budget(chain, rec, dt_s: float = DEFAULT_DT_S) -> dict:
 
 def trial_energy_budget(trial, dt_s: float = DEFAULT_DT_S) -> list[dict]:
     """Per-stance budgets of a trial; ``flight_j`` for every stance followed by another (module docstring)."""
-    from hop_impedance.simulation.hopping_trial import returned_spring_energy_j
+    from hop_impedance.simulation.hopping_trial import ENERGY_KEEPING_FLIGHTS, returned_spring_energy_j
 
     rows = [stance_energy_budget(trial.chain, rec, dt_s) for rec in trial.stances]
     for row, rec, nxt in zip(rows, trial.stances, trial.stances[1:]):
         returned = 0.0
-        if trial.config.flight in ("energy_keeping", "trunk_held"):
+        if trial.config.flight in ENERGY_KEEPING_FLIGHTS:
             rho_next = joint_angles(nxt.touchdown.g[2:][None], trial.chain.alpha_rad)[0]
             returned = returned_spring_energy_j(rec.law, rec.stance.ref, rec.stance.rho_rad[-1], rho_next)
         row["flight_j"] = _energy(trial.chain, nxt.touchdown.g, nxt.touchdown.gd) - row["e_takeoff_j"] - returned

@@ -331,13 +331,25 @@ def returned_spring_energy_j(law: ImpedanceLaw, ref, rho_takeoff: np.ndarray, rh
         return 0.0
 
 
+def _toe_row(chain: Chain, q: np.ndarray, held: int | None = None) -> np.ndarray:
+    """d(COM x - toe x)/dq in posture ``q`` (shape (4,)): the segment rates' horizontal toe velocity relative to the
+    COM; with ``held`` that segment's entry zero (the rates that keep the toe still then leave it at rest)."""
+    j0 = com_offset_jacobian(chain, q)[0]
+    if held is not None:
+        j0 = j0.copy()
+        j0[held] = 0.0
+    return j0
+
+
 def touchdown_segment_rates(chain: Chain, q: np.ndarray, com_vx_m_s: float, direction: np.ndarray,
-                            internal_energy_j: float) -> tuple[np.ndarray, float]:
+                            internal_energy_j: float, held: int | None = None) -> tuple[np.ndarray, float]:
     """Segment rates at touchdown that carry ``internal_energy_j`` of motion relative to the COM.
 
     The rates are ``base + s u``: ``base`` the minimum-norm rates that keep the toe still
     horizontally, ``u`` the part of ``direction`` that does not move the toe horizontally, and
     ``s >= 0`` solves ``0.5 qd^T M_int qd = internal_energy_j`` (:func:`internal_mass_matrix`).
+    With ``held`` (a segment index) that segment's rate is zero: ``base`` and ``u`` use the other
+    segments only (:func:`_toe_row`).
 
     Returns
     -------
@@ -348,9 +360,11 @@ def touchdown_segment_rates(chain: Chain, q: np.ndarray, com_vx_m_s: float, dire
         below what ``base`` alone carries, or when ``direction`` is zero; 0 normally.
     """
     q = np.asarray(q, float)
-    j0 = com_offset_jacobian(chain, q)[0]
+    j0 = _toe_row(chain, q, held)
     base = j0 * (com_vx_m_s / float(j0 @ j0))
-    d = np.asarray(direction, float)
+    d = np.array(direction, float)
+    if held is not None:
+        d[held] = 0.0
     u = d - j0 * (float(j0 @ d) / float(j0 @ j0))
     m_int = internal_mass_matrix(chain, q)
     a, b, c = 0.5 * float(u @ m_int @ u), float(u @ m_int @ base), 0.5 * float(base @ m_int @ base)
@@ -502,13 +516,21 @@ def flight_segment_rates(chain: Chain, law: ImpedanceLaw, stance: StanceSimulati
     -------
     (rates rad/s shape (4,), energy carried J, energy not placed J)
     """
+    carried, direction = _carried_flight_energy(chain, law, stance, q_next, landing_rates_rad_s)
+    rates, not_placed = touchdown_segment_rates(chain, q_next, com_vx_m_s, direction, carried)
+    return rates, carried, not_placed
+
+
+def _carried_flight_energy(chain: Chain, law: ImpedanceLaw, stance: StanceSimulation, q_next: np.ndarray,
+                           landing_rates_rad_s=None) -> tuple[float, np.ndarray]:
+    """(energy the flight after ``stance`` carries to the touchdown in posture ``q_next`` (J): the segments' kinetic
+    energy relative to the COM at take-off + :func:`returned_spring_energy_j`; the landing direction: the take-off
+    rates reversed, or ``landing_rates_rad_s``)."""
     g, gd = stance.g[-1], stance.gd[-1]
     rho_next = joint_angles(np.asarray(q_next, float)[None], chain.alpha_rad)[0]
     carried = internal_kinetic_energy_j(chain, g[2:], gd[2:]) + returned_spring_energy_j(
         law, stance.ref, stance.rho_rad[-1], rho_next)
-    direction = -gd[2:] if landing_rates_rad_s is None else np.asarray(landing_rates_rad_s, float)
-    rates, not_placed = touchdown_segment_rates(chain, q_next, com_vx_m_s, direction, carried)
-    return rates, carried, not_placed
+    return carried, -gd[2:] if landing_rates_rad_s is None else np.asarray(landing_rates_rad_s, float)
 
 
 #: Index of the trunk (HAT) among the segment angles q1..q4.
@@ -525,11 +547,9 @@ def trunk_held_segment_rates(chain: Chain, q: np.ndarray, com_vx_m_s: float, dir
     impulse along q4, takes out ``loss = 0.5 full[3]^2 / (M^-1)[3, 3]`` (M the segments' mass matrix relative to
     the COM, :func:`internal_mass_matrix`): the M-orthogonal split of T(full) into the motion with the trunk at
     rest and the trunk's share, so ``0 <= loss <= internal_energy_j``. The legs then land carrying
-    ``internal_energy_j - loss``:
-    rates ``base + s u`` with the trunk's entry zero in ``base`` and ``u`` (zero absolute trunk pitch rate at
-    touchdown, so the balance's damper starts the stance at rest), ``base`` the minimum-norm leg rates that keep
-    the toe still horizontally, ``u`` the leg part of ``direction`` less its toe-moving part, ``s >= 0`` for the
-    energy (as :func:`touchdown_segment_rates` does on all four segments).
+    ``internal_energy_j - loss``: :func:`touchdown_segment_rates` with the trunk held (zero absolute trunk pitch
+    rate at touchdown, so the balance's damper starts the stance at rest; the legs along the leg part of
+    ``direction``).
 
     Returns
     -------
@@ -544,19 +564,9 @@ def trunk_held_segment_rates(chain: Chain, q: np.ndarray, com_vx_m_s: float, dir
     full, not_placed_full = touchdown_segment_rates(chain, q, com_vx_m_s, direction, internal_energy_j)
     m_int = internal_mass_matrix(chain, q)
     loss = 0.5 * full[TRUNK_SEGMENT] ** 2 / float(np.linalg.inv(m_int)[TRUNK_SEGMENT, TRUNK_SEGMENT])
-    energy = internal_energy_j - not_placed_full - loss
-    j0 = com_offset_jacobian(chain, q)[0].copy()
-    j0[TRUNK_SEGMENT] = 0.0
-    base = j0 * (com_vx_m_s / float(j0 @ j0))
-    d = np.asarray(direction, float).copy()
-    d[TRUNK_SEGMENT] = 0.0
-    u = d - j0 * (float(j0 @ d) / float(j0 @ j0))
-    a, b, c = 0.5 * float(u @ m_int @ u), float(u @ m_int @ base), 0.5 * float(base @ m_int @ base)
-    disc = b * b - 4.0 * a * (c - energy)
-    if a <= 1e-12 or disc < 0.0 or (-b + np.sqrt(disc)) < 0.0:
-        return base, float(loss), float(not_placed_full + energy - c)
-    s = (-b + np.sqrt(disc)) / (2.0 * a)
-    return base + s * u, float(loss), float(not_placed_full)
+    rates, not_placed = touchdown_segment_rates(chain, q, com_vx_m_s, direction,
+                                                internal_energy_j - not_placed_full - loss, held=TRUNK_SEGMENT)
+    return rates, float(loss), float(not_placed_full + not_placed)
 
 
 def trunk_held_toe_correction(chain: Chain, q: np.ndarray, com_vx_m_s: float, rates: np.ndarray) -> np.ndarray:
@@ -564,9 +574,8 @@ def trunk_held_toe_correction(chain: Chain, q: np.ndarray, com_vx_m_s: float, ra
     in posture ``q`` at COM vx ``com_vx_m_s``: the ``"trunk_held"`` flight's touchdown rates computed in another
     posture (the calibration's, for the first hop and the COM-offset probes) moved to ``q`` without giving the trunk
     a rate (:func:`touchdown_state` then keeps them as they are)."""
-    j0 = com_offset_jacobian(chain, np.asarray(q, float))[0].copy()
-    j0[TRUNK_SEGMENT] = 0.0
-    r = np.asarray(rates, float).copy()
+    j0 = _toe_row(chain, np.asarray(q, float), TRUNK_SEGMENT)
+    r = np.array(rates, float)
     r[TRUNK_SEGMENT] = 0.0
     return r + j0 * ((com_vx_m_s - float(j0 @ r)) / float(j0 @ j0))
 
@@ -580,11 +589,7 @@ def flight_rates(chain: Chain, config: HoppingConfig, law: ImpedanceLaw, stance:
     if config.flight != "trunk_held":
         rates, _, not_placed = flight_segment_rates(chain, law, stance, q_next, com_vx_m_s, direction)
         return rates, 0.0, not_placed
-    g, gd = stance.g[-1], stance.gd[-1]
-    rho_next = joint_angles(np.asarray(q_next, float)[None], chain.alpha_rad)[0]
-    carried = internal_kinetic_energy_j(chain, g[2:], gd[2:]) + returned_spring_energy_j(
-        law, stance.ref, stance.rho_rad[-1], rho_next)
-    d = -gd[2:] if direction is None else np.asarray(direction, float)
+    carried, d = _carried_flight_energy(chain, law, stance, q_next, direction)
     return trunk_held_segment_rates(chain, q_next, com_vx_m_s, d, carried)
 
 
