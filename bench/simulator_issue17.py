@@ -442,6 +442,11 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--push-off-gain", type=float, default=None, metavar="G",
                         help="the hop-by-hop push-off controller's gain as a fraction of its deadbeat one "
                              "(HoppingConfig.push_off_gain; default 1)")
+    parser.add_argument("--passive-landing", type=float, default=None, metavar="S",
+                        help="the flight's last S seconds as the free chain with zero joint moments "
+                             "(HoppingConfig.passive_landing_s; the stances unchanged; default 0: the quintic)")
+    parser.add_argument("--passive-takeoff", type=float, default=None, metavar="S",
+                        help="the same for the flight's first S seconds (HoppingConfig.passive_takeoff_s)")
 
 
 def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
@@ -494,6 +499,10 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     if args.push_off_gain is not None:
         options["push_off_gain"] = args.push_off_gain
         said.append(f"push-off gain {args.push_off_gain:g}")
+    for phase in ("takeoff", "landing"):
+        if getattr(args, f"passive_{phase}") is not None:
+            options[f"passive_{phase}_s"] = getattr(args, f"passive_{phase}")
+            said.append(f"passive {phase} {options[f'passive_{phase}_s']:g} s")
     return options, f"scenarios.{'seed_like_hopper_options' if preset else 'seed_like_options'}(), " + ", ".join(said)
 
 
@@ -518,7 +527,7 @@ def main() -> None:
     variant = any((args.bell is not None, args.law_scale != "none",
                    args.pad, args.posture, args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS,
                    args.push_weights, args.law_scale_file, args.flight, args.landing, args.push_off_gain is not None,
-                   args.no_seed001, args.seed != 1))
+                   args.passive_landing is not None, args.passive_takeoff is not None, args.no_seed001, args.seed != 1))
     # the table kept in docs/simulator.md: the bundled recordings' preset (--hopper seed-like --surface rigid) or the
     # library's default options; nothing else, so that the docs never show a variant as the simulator
     if args.write and (variant or (args.hopper, args.surface) not in WRITABLE):

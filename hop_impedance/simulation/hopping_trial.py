@@ -79,6 +79,7 @@ from hop_impedance.simulation.dynamics import (
 )
 from hop_impedance.simulation.ground import Ground
 from hop_impedance.simulation.impedance_laws import CompositeLaw, Eq3Law, ImpedanceLaw, PushOff, TrunkBalance
+from hop_impedance.simulation.passive_flight import passive_duration_s, passive_knots
 from hop_impedance.simulation.stance import (
     DEFAULT_ATOL,
     DEFAULT_FRICTION_COEFFICIENT,
@@ -210,6 +211,12 @@ class HoppingConfig:
         The hop-by-hop push-off controller's gain as a fraction of its deadbeat one (:func:`_hop_push_scale`:
         the push-off scale is corrected by ``push_off_gain (target - speed) / d_speed_d_scale``). 1 (default):
         the deadbeat correction; smaller: a partial correction per hop (a steadier push-off).
+    passive_takeoff_s, passive_landing_s : float
+        The flight's first / last phase (s; each at most :data:`~hop_impedance.simulation.passive_flight.MAX_FLIGHT_FRACTION`
+        of the flight) as the free chain with zero joint moments (:mod:`~hop_impedance.simulation.passive_flight`): the
+        take-off and touchdown states, and so every stance, are unchanged; only the segments' motion in the air is (what
+        the markers record), in every flight after a stance (the lead-in onto the first touchdown keeps its quintic).
+        0 (default): the quintic from the take-off / to the touchdown.
     """
 
     freq_hz: float
@@ -235,6 +242,8 @@ class HoppingConfig:
     landing_feedback: LandingFeedback | None = None
     landing: str = "reversed"
     push_off_gain: float = 1.0
+    passive_takeoff_s: float = 0.0
+    passive_landing_s: float = 0.0
 
     def __post_init__(self) -> None:
         if self.flight not in FLIGHT_MODELS:
@@ -247,6 +256,9 @@ class HoppingConfig:
             raise ValueError(f"n_hops must be at least 1, got {self.n_hops}")
         if not self.push_off_gain >= 0:
             raise ValueError(f"push_off_gain must be non-negative, got {self.push_off_gain}")
+        for name in ("passive_takeoff_s", "passive_landing_s"):
+            if not 0 <= getattr(self, name) < 1:
+                raise ValueError(f"{name} must be in [0, 1) s, got {getattr(self, name)}")
 
     def surface_for_hop(self, hop: int) -> Ground:
         """Surface under hop ``hop`` (0-based)."""
@@ -1007,15 +1019,30 @@ def _flight_to_next_touchdown(chain: Chain, config: HoppingConfig, law: Impedanc
             chain, config, law, st, q_next, float(v_next[0]),
             landing_direction(chain, config, st, q_next, float(v_next[0]), t_f))
     td_next = touchdown_state(chain, q_next, v_next, 0.0, rates)
-    angles = BPoly.from_derivatives(
-        [0.0, t_f],
-        np.array([[g_to[2:], gd_to[2:], st.gdd[-1, 2:]], [q_next, td_next.gd[2:], np.zeros(4)]]),
-    )
+    angles = flight_angles(chain, (g_to, gd_to, st.gdd[-1]), td_next, t_f, (config.passive_takeoff_s, config.passive_landing_s))
     if last:
         t_f = max(v_to[1] / g_acc, 0.4 * t_f)
     x_toe = float(com_next[0] - body_com(chain, np.r_[0.0, 0.0, q_next])[0])
     return _NextTouchdown(Flight(t_takeoff_s, t_f, com_to, v_to, angles, g_acc), x_toe, float(v_next[0]),
                           float(-v_next[1]), rates, not_placed, loss)
+
+
+def flight_angles(chain: Chain, takeoff: tuple[np.ndarray, np.ndarray, np.ndarray], td: TouchdownState, t_f: float,
+                  passive_s: tuple[float, float] = (0.0, 0.0)) -> BPoly:
+    """The flight's segment angles over ``[0, t_f]`` (s since take-off).
+
+    A quintic from the take-off's angles, rates and accelerations (``takeoff``: the stance's last ``g``, ``gd``,
+    ``gdd``) to the touchdown ``td``'s angles and rates with zero acceleration. ``passive_s`` = (after take-off,
+    before touchdown) > 0: the flight's first / last :func:`~hop_impedance.simulation.passive_flight.passive_duration_s`
+    are the free chain with zero joint moments from the take-off state forward / to the touchdown state backward
+    (:mod:`~hop_impedance.simulation.passive_flight`), the quintic joining them (angles, rates, accelerations)."""
+    g_to, gd_to, gdd_to = takeoff
+    up, down = (passive_duration_s(s, t_f) for s in passive_s)
+    tau_up, knots_up = (passive_knots(chain, g_to, gd_to, up) if up > 0
+                        else (np.zeros(1), np.array([[g_to[2:], gd_to[2:], gdd_to[2:]]])))
+    tau_down, knots_down = (passive_knots(chain, td.g, td.gd, -down) if down > 0
+                            else (np.zeros(1), np.array([[td.g[2:], td.gd[2:], np.zeros(4)]])))
+    return BPoly.from_derivatives(np.r_[tau_up, t_f + tau_down], np.concatenate([knots_up, knots_down]))
 
 
 def leg_stiffness_n_per_m(chain: Chain, stance: StanceSimulation) -> tuple[float, float, float]:

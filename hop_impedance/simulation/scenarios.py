@@ -310,22 +310,22 @@ def hopping_config(
     unexpected_hops: tuple[int, ...] = (),
     calibration_surface: str | None = None,
     variability: bool = True,
-    trunk_balance: TrunkBalance | None = None,
-    flight: str = "prescribed", landing: str = "reversed",
     contact_ahead_m: float = 0.0,
     push_timing: tuple[float, float] = PUSH_OFF_TIMING,
     hip_trunk_spring_nm_rad: float = 0.0,
     bell_activation_min: float | None = None, law_scale: dict | None = None,
-    pad: GroundLaw | None = None, push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS, push_off_gain: float = 1.0,
+    pad: GroundLaw | None = None, push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS,
+    **config_options,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
 
     The push-off is timed from a passive stance on the calibration surface: onset and duration are the fractions
     ``push_timing`` of that stance (default :data:`PUSH_OFF_TIMING`: 35 % and 60 %). ``calibration_surface``
     (default: the trial's surface) is the surface the law is tuned for; with ``unexpected_surface`` the listed hops
-    land on that surface instead. ``trunk_balance`` (e.g. :data:`TRUNK_BALANCE`) and ``flight`` are passed to
-    :class:`HoppingConfig` (defaults: none, prescribed flight), and so is ``landing`` (:attr:`HoppingConfig.landing`,
-    default "reversed"). ``contact_ahead_m`` moves the ground contact that far in front of the toe marker
+    land on that surface instead. ``config_options`` are passed to :class:`HoppingConfig` as they are (its defaults
+    where not given): ``trunk_balance`` (e.g. :data:`TRUNK_BALANCE`; default none), ``flight``, ``landing``,
+    ``push_off_gain``, ``passive_takeoff_s``, ``passive_landing_s``, ...
+    ``contact_ahead_m`` moves the ground contact that far in front of the toe marker
     (:func:`contact_ahead_of_toe_marker`; e.g. :func:`toe_tip_ahead_m`, the seed's hinge at the tip of the toe; default 0).
     ``hip_trunk_spring_nm_rad`` (e.g. :data:`HIP_TRUNK_SPRING_NM_RAD`) holds the trunk by a hip spring
     about the touchdown hip angle, added to the Table 2 hip k0 (so the truth file's hip law is the whole
@@ -334,8 +334,7 @@ def hopping_config(
     (:data:`SEED_LIKE_LAW_SCALE`; None: Table 2): factors on Table 2's k0, k1 (:func:`law_scale_at`), in the truth.
     ``pad`` (e.g. :data:`SHOE_PAD`; None: none): an elastic pad in series with every surface of the trial
     (:class:`~hop_impedance.simulation.ground.PaddedGround`), stated in the truth file's surface. ``push_weights``: the
-    push-off's amplitude per joint in units of :data:`PUSH_OFF_BASE_NM` (default :data:`PUSH_OFF_WEIGHTS`); ``push_off_gain``:
-    :attr:`HoppingConfig.push_off_gain` (default 1, the deadbeat hop-by-hop controller).
+    push-off's amplitude per joint in units of :data:`PUSH_OFF_BASE_NM` (default :data:`PUSH_OFF_WEIGHTS`).
     """
     chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
     expected = with_pad(surface(calibration_surface or surface_name), pad)
@@ -350,9 +349,7 @@ def hopping_config(
         unexpected_surface=with_pad(surface(unexpected_surface), pad) if unexpected_surface else None,
         unexpected_hops=tuple(unexpected_hops),
         posture_sd_rad=0.01 if variability else 0.0, speed_sd=0.02 if variability else 0.0,
-        push_sd=0.03 if variability else 0.0,
-        trunk_balance=trunk_balance,
-        flight=flight, landing=landing, push_off_gain=push_off_gain,
+        push_sd=0.03 if variability else 0.0, **config_options,
     )
     if surface_name != (calibration_surface or surface_name):
         config = HoppingConfig(**{**config.__dict__, "unexpected_surface": with_pad(surface(surface_name), pad),

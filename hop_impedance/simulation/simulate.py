@@ -8,30 +8,16 @@ import numpy as np
 
 from hop_impedance.biomech.body_model import body_model_from_stature
 from hop_impedance.recording import Recording, Subject
-from hop_impedance.simulation.ground import GroundLaw
 from hop_impedance.simulation.hopping_trial import simulate_hopping
-from hop_impedance.simulation.impedance_laws import TrunkBalance
-from hop_impedance.simulation.scenarios import (
-    DEFAULT_TOUCHDOWN_RHO,
-    PUSH_OFF_TIMING,
-    PUSH_OFF_WEIGHTS,
-    SEED_SUBJECT,
-    Effects,
-    hopping_config,
-)
+from hop_impedance.simulation.scenarios import SEED_SUBJECT, Effects, hopping_config
 from hop_impedance.simulation.sensors import SensorConfig, sample_recording
 from hop_impedance.simulation.truth import trial_truth, truth_path, write_truth
 
 
 def simulate_recording(
     freq_hz: float = 2.2, surface_name: str = "hard", n_hops: int = 10, seed: int = 1, effects: Effects = Effects(),
-    sensors: SensorConfig = SensorConfig(), *, subject: Subject = SEED_SUBJECT, touchdown_rho_rad=DEFAULT_TOUCHDOWN_RHO,
-    tuned_for: str | None = None, unexpected_surface: str | None = None, unexpected_hops: tuple[int, ...] = (),
-    variability: bool = True, generator: dict | None = None, trunk_balance: TrunkBalance | None = None,
-    flight: str = "prescribed", landing: str = "reversed", contact_ahead_m: float = 0.0,
-    push_timing: tuple[float, float] = PUSH_OFF_TIMING,
-    bell_activation_min: float | None = None, law_scale: dict | None = None, pad: GroundLaw | None = None,
-    push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS, push_off_gain: float = 1.0,
+    sensors: SensorConfig = SensorConfig(), *, subject: Subject = SEED_SUBJECT, tuned_for: str | None = None,
+    generator: dict | None = None, **options,
 ) -> tuple[Recording, dict]:
     """Simulate a hopping trial and sample it as a contract recording.
 
@@ -49,34 +35,27 @@ def simulate_recording(
         Rates and sensor effects.
     subject : Subject
         Default the seed's mean subject (54.8 kg, 1.63 m, female).
-    touchdown_rho_rad : 3 floats
-        Nominal joint angles at touchdown (rad).
     tuned_for : str, optional
         Surface the law (touchdown speed, push-off) is calibrated on; default
         ``surface_name``. Tuned for soft and run on hard = seed 001's
         unexpected hard surface for every hop.
-    unexpected_surface, unexpected_hops :
-        Surface swapped in, without re-tuning, on the listed hops (0-based).
-    variability : bool
-        Seeded hop-to-hop variability on (posture, speed target, push-off).
     generator : dict, optional
         Stored as is in the truth file (e.g. the command line).
-    trunk_balance, flight, landing, contact_ahead_m, push_timing, bell_activation_min :
-        Trunk-balance moment at the hip, flight model and its landing, ground contact ahead of the toe marker (m) and
-        push-off onset/duration as fractions of the passive stance (:func:`hopping_config`; defaults:
-        none, prescribed, reversed, 0 = at the marker, :data:`PUSH_OFF_TIMING`); ``bell_activation_min``, ``law_scale``, ``pad``,
-        ``push_weights``, ``push_off_gain`` too; :func:`seed_like_options` bundles issue 17's candidate.
+    **options
+        The hopper's choices, keyword arguments of :func:`~hop_impedance.simulation.scenarios.hopping_config` (one
+        place for their defaults): ``touchdown_rho_rad``, ``unexpected_surface`` / ``unexpected_hops`` (a surface
+        swapped in, without re-tuning, on the listed 0-based hops), ``variability`` (seeded hop-to-hop variability,
+        default on), ``trunk_balance``, ``flight``, ``landing``, ``contact_ahead_m``, ``push_timing``,
+        ``bell_activation_min``, ``law_scale``, ``pad``, ``push_weights``, ``push_off_gain``, ``passive_takeoff_s``,
+        ``passive_landing_s``, ...; :func:`~hop_impedance.simulation.scenarios.seed_like_options` bundles issue 17's
+        candidate.
 
     Returns
     -------
     (recording : Recording, truth : dict, see :mod:`hop_impedance.simulation.truth`)
     """
-    chain, config = hopping_config(
-        freq_hz, surface_name, n_hops, effects, subject=subject, touchdown_rho_rad=touchdown_rho_rad,
-        unexpected_surface=unexpected_surface, unexpected_hops=unexpected_hops, calibration_surface=tuned_for,
-        variability=variability, trunk_balance=trunk_balance, flight=flight, landing=landing, contact_ahead_m=contact_ahead_m,
-        push_timing=push_timing, bell_activation_min=bell_activation_min, law_scale=law_scale, pad=pad,
-        push_weights=push_weights, push_off_gain=push_off_gain)
+    chain, config = hopping_config(freq_hz, surface_name, n_hops, effects, subject=subject,
+                                   calibration_surface=tuned_for, **options)
     trial = simulate_hopping(chain, config, seed=seed)
     recording, sensor_truth = sample_recording(trial, sensors, subject, np.random.default_rng([seed, 1]))
     gen = {"seed": seed, "freq_hz": freq_hz, "surface": surface_name, "n_hops": n_hops,
