@@ -471,7 +471,8 @@ def measure_all(freqs: str | None, measure_one) -> dict:
 def preset_changed(args: argparse.Namespace) -> bool:
     """Whether the command line changes ``--hopper``'s preset: a flag that acts on it only, or ``--flight`` /
     ``--push-timing`` with ``--hopper`` (without it they vary the other hoppers)."""
-    only_preset = (args.push_weights, args.law_scale_file, args.trunk_gains, args.landing, args.push_off_gain is not None)
+    only_preset = (args.push_weights, args.law_scale_file, args.trunk_gains, args.landing, args.push_off_gain is not None,
+                   args.passive_landing is not None)
     return bool(any(only_preset) or args.hopper and (args.flight != "prescribed" or args.push_timing))
 
 
@@ -490,11 +491,13 @@ def run_hopper(args: argparse.Namespace) -> tuple[dict, str]:
                                                          law_scale="none", push_weights=args.push_weights,
                                                          law_scale_file=args.law_scale_file, trunk=args.trunk_gains,
                                                          flight=flight, push_timing=args.push_timing,
-                                                         landing=args.landing, push_off_gain=gain))
+                                                         landing=args.landing, push_off_gain=gain,
+                                                         passive_landing=args.passive_landing))
         variant = "".join(f" with {name} {value}" for name, value in (
             ("push-off weights", args.push_weights), ("push-off timing", args.push_timing),
             ("trunk balance", args.trunk_gains), ("flight", flight), ("landing", args.landing),
             ("push-off gain", None if gain is None else f"{gain:g}"),
+            ("passive landing (s)", None if args.passive_landing is None else f"{args.passive_landing:g}"),
             ("the law Table 2 x", args.law_scale_file)) if value)
     results = measure_all(args.freqs, lambda f: measure_hopper(f, options, SEED_LIKE_HOPPER_SURFACE, fits=args.fits))
     setup = (f"scenarios.seed_like_hopper_options() (the hopper of the bundled Table 1 recordings){variant} on the "
@@ -530,6 +533,9 @@ def main() -> None:
     parser.add_argument("--push-off-gain", type=float, default=None, metavar="G",
                         help="with --hopper: the hop-by-hop push-off controller's gain as a fraction of its deadbeat one "
                              "(simulator_issue17.py's flag; default 1); not with --write")
+    parser.add_argument("--passive-landing", type=float, default=None, metavar="S",
+                        help="with --hopper: the flight's last S s as the free chain with zero joint moments "
+                             "(simulator_issue17.py's flag; HoppingConfig.passive_landing_s); not with --write")
     parser.add_argument("--bell", type=float, default=None, metavar="A_MIN",
                         help="the bell activation from A_MIN at touchdown over the passive stance "
                              "(hopping_config bell_activation_min; --seed-like: scenarios.SEED_LIKE_BELL_MIN, 0.7; "
@@ -558,8 +564,8 @@ def main() -> None:
     if args.hopper and (args.seed_like or args.freqs and args.write):
         parser.error("--hopper is the preset: not with --seed-like, and --write not with --freqs")
     if preset_changed(args) and (not args.hopper or args.write):
-        parser.error("--push-weights, --law-scale-file, --trunk-gains, --landing, --push-off-gain and (with --hopper) "
-                     "--flight and --push-timing change --hopper's preset, and are not written")
+        parser.error("--push-weights, --law-scale-file, --trunk-gains, --landing, --push-off-gain, --passive-landing and "
+                     "(with --hopper) --flight and --push-timing change --hopper's preset, and are not written")
     if args.hopper:
         t0 = time.perf_counter()
         results, setup = run_hopper(args)
