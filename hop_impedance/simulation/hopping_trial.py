@@ -1035,13 +1035,16 @@ def flight_angles(chain: Chain, takeoff: tuple[np.ndarray, np.ndarray, np.ndarra
     ``gdd``) to the touchdown ``td``'s angles and rates with zero acceleration. ``passive_s`` = (after take-off,
     before touchdown) > 0: the flight's first / last :func:`~hop_impedance.simulation.passive_flight.passive_duration_s`
     are the free chain with zero joint moments from the take-off state forward / to the touchdown state backward
-    (:mod:`~hop_impedance.simulation.passive_flight`), the quintic joining them (angles, rates, accelerations)."""
+    (:mod:`~hop_impedance.simulation.passive_flight`; shorter where its toe would pass through the ground), the quintic
+    joining them (angles, rates, accelerations)."""
     g_to, gd_to, gdd_to = takeoff
     up, down = (passive_duration_s(s, t_f) for s in passive_s)
-    tau_up, knots_up = (passive_knots(chain, g_to, gd_to, up) if up > 0
-                        else (np.zeros(1), np.array([[g_to[2:], gd_to[2:], gdd_to[2:]]])))
-    tau_down, knots_down = (passive_knots(chain, td.g, td.gd, -down) if down > 0
-                            else (np.zeros(1), np.array([[td.g[2:], td.gd[2:], np.zeros(4)]])))
+    tau_up, knots_up = passive_knots(chain, g_to, gd_to, up) if up > 0 else (np.zeros(1), None)
+    tau_down, knots_down = passive_knots(chain, td.g, td.gd, -down) if down > 0 else (np.zeros(1), None)
+    if len(tau_up) == 1:  # no phase (or none the ground allows): the quintic from the take-off's own state
+        knots_up = np.array([[g_to[2:], gd_to[2:], gdd_to[2:]]])
+    if len(tau_down) == 1:
+        knots_down = np.array([[td.g[2:], td.gd[2:], np.zeros(4)]])
     return BPoly.from_derivatives(np.r_[tau_up, t_f + tau_down], np.concatenate([knots_up, knots_down]))
 
 

@@ -75,8 +75,9 @@ def passive_knots(chain: Chain, g: np.ndarray, gd: np.ndarray, duration_s: float
         Segment angles, rates and accelerations (rad, rad/s, rad/s^2) at each knot; the contact's is the free chain's
         (its accelerations those of zero joint moments).
 
-    Raises ValueError if the toe (the contact point) would be below its height at the contact at a knot in the air: a
-    landing or take-off that cannot happen in the air.
+    The phase ends (going away from the contact) at the last knot before one where the toe (the contact point) would be
+    below its height at the contact: a free chain whose toe would pass through the ground there cannot be the flight,
+    so the quintic takes over from that knot (a shorter phase; only the contact's knot left: none).
     """
     n = int(round(abs(duration_s) / KNOT_STEP_S))
     tau = np.sign(duration_s) * KNOT_STEP_S * np.arange(n + 1)
@@ -90,8 +91,8 @@ def passive_knots(chain: Chain, g: np.ndarray, gd: np.ndarray, duration_s: float
     for k, y in enumerate(states):
         knots[k, 0], knots[k, 1] = y[2:N_COORDS], y[N_COORDS + 2:]
         knots[k, 2] = free_chain_rhs(chain, y)[N_COORDS + 2:]
-    if n and np.min(states[1:, 1]) < g[1] - 1e-9:  # the contact point's height in the air
-        raise ValueError(f"passive flight phase: the toe would be {(g[1] - np.min(states[1:, 1])) * 1000:.1f} mm "
-                         f"below the ground within {abs(duration_s):.3f} s of the contact")
+    below = np.flatnonzero(states[:, 1] < g[1] - 1e-9)  # the contact point's height; the contact itself is at it
+    keep = int(below[0]) if len(below) else n + 1
+    tau, knots = tau[:keep], knots[:keep]
     order = np.argsort(tau)
     return tau[order], knots[order]

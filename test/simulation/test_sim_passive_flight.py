@@ -14,7 +14,7 @@ import pytest
 
 from hop_impedance.simulation.dynamics import equations_of_motion
 from hop_impedance.simulation.hopping_trial import HoppingConfig, simulate_hopping
-from hop_impedance.simulation.passive_flight import KNOT_STEP_S, MAX_FLIGHT_FRACTION, passive_duration_s
+from hop_impedance.simulation.passive_flight import KNOT_STEP_S, MAX_FLIGHT_FRACTION, passive_duration_s, passive_knots
 from hop_impedance.simulation.scenarios import hopping_config
 
 FD_STEP_S = 1e-5
@@ -95,6 +95,18 @@ def test_a_phase_is_at_most_its_share_of_the_flight_in_whole_knots():
     assert passive_duration_s(0.08, 0.30) == pytest.approx(0.08)
     assert passive_duration_s(0.0, 0.30) == 0.0
     assert MAX_FLIGHT_FRACTION * 0.19 // KNOT_STEP_S == 15
+
+
+def test_a_phase_ends_where_its_toe_would_pass_through_the_ground(trials):
+    chain, _, _, both = trials
+    td = both.stances[1].touchdown
+    tau, knots = passive_knots(chain, td.g, td.gd, -0.06)
+    assert len(tau) == 13 and tau[0] == pytest.approx(-0.06) and tau[-1] == 0.0
+    np.testing.assert_array_equal(knots[-1, 0], td.g[2:])
+    # the toe moving up at the contact: backward in time it was below the ground at once, so no phase
+    rising = td.gd.copy()
+    rising[1] = 0.5
+    assert len(passive_knots(chain, td.g, rising, -0.06)[0]) == 1
 
 
 def test_a_negative_phase_is_refused():
