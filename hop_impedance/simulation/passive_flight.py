@@ -20,7 +20,12 @@ unchanged, so the stances, the energy at touchdown and every figure of the simul
 the quintic runs between the two phases (angles, rates and accelerations matched, so the angles stay C2). In the
 phases the whole body's angular momentum about its COM is conserved and its COM is exactly ballistic (what
 :class:`~hop_impedance.simulation.hopping_trial.Flight` puts it on), so inverse dynamics reads zero joint moments
-there; the segments are repositioned in the flight's middle, away from the contacts.
+there; the segments are repositioned in the flight's middle, away from the contacts. A phase is shorter where the
+free chain's toe would pass through the ground (:func:`passive_knots`).
+
+Measured (docs/simulator.md, "Session 25"): the landing phase takes the flight's moment out of the analysis' 1.53 Hz
+hip at touchdown (-0.7..-29.8 -> +0.4..+7.9 N m with the trunk held); a take-off phase as well leaves the short
+1.53 Hz flight's quintic 40 ms, whose moment the 12 Hz filter then carries into the stance's start: landing only.
 
 Choice (documented, not from the seed): zero moments, the muscles neither braking nor driving the segments right
 after take-off and before contact. The seed does not report pre-landing activity; a net moment near zero at contact is
@@ -55,10 +60,10 @@ def free_chain_rhs(chain: Chain, y: np.ndarray) -> np.ndarray:
     return np.r_[y[N_COORDS:], gdd]
 
 
-def passive_duration_s(passive_flight_s: float, flight_s: float) -> float:
-    """Each passive phase's length in a flight of ``flight_s``: the asked one, at most :data:`MAX_FLIGHT_FRACTION` of
-    the flight, rounded down to whole knots (0: none)."""
-    length = min(float(passive_flight_s), MAX_FLIGHT_FRACTION * float(flight_s))
+def passive_duration_s(asked_s: float, flight_s: float) -> float:
+    """A passive phase's length in a flight of ``flight_s``: the asked one, at most :data:`MAX_FLIGHT_FRACTION` of the
+    flight, rounded down to whole knots (0: none)."""
+    length = min(float(asked_s), MAX_FLIGHT_FRACTION * float(flight_s))
     return float(np.floor(length / KNOT_STEP_S + 1e-9) * KNOT_STEP_S) if length > 0 else 0.0
 
 
