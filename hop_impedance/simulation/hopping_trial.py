@@ -836,8 +836,8 @@ def _balanced_com_ahead(hop: _CalibrationHop, speed: float, scale: float,
     return com_ahead, vx0, vx1
 
 
-def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> HoppingTrial:
-    """Simulate ``config.n_hops`` hops; seeded hop-to-hop variability.
+def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0, posture_offsets: dict | None = None) -> HoppingTrial:
+    """Simulate ``config.n_hops`` hops; seeded variability (``posture_offsets``: hop >= 1 -> rad added to its rho_td).
 
     The trial starts ``lead_in_s`` before the first touchdown (in flight) and
     ends at the apex of the flight after the last stance, so no stance is cut
@@ -882,8 +882,8 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0) -> Hopp
             break
         v_to = com_velocity(chain, st.g[-1], st.gd[-1])
         hop_config, hop_cal = landing_for_hop(chain, config, cal, td)
-        q_next = _next_posture(chain, hop_config, hop_cal, rho_nom + rng.normal(0.0, config.posture_sd_rad, 3),
-                               float(v_to[0]), st.duration_s)
+        rho_next = rho_nom + rng.normal(0.0, config.posture_sd_rad, 3) + (posture_offsets or {}).get(i + 1, 0.0)
+        q_next = _next_posture(chain, hop_config, hop_cal, rho_next, float(v_to[0]), st.duration_s)
         try:
             nxt = _flight_to_next_touchdown(chain, hop_config, law, st, q_next, t_end, last=i == config.n_hops - 1)
         except ValueError as exc:
