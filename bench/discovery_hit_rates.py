@@ -51,7 +51,9 @@ commit a93ac09); ``--simulate-from D``: ``forward_selection.SIMULATE_FROM_S`` (s
 stance simulated from the measured state D s after its touchdown, compared from there); ``--two-segment``:
 ``forward_selection.TWO_SEGMENT`` with it (session 23's sub-option: the run from the touchdown compared before the
 start sample, the late run from it), ``--two-segment-flight``: ``forward_selection.TWO_SEGMENT_FLIGHT`` with that
-(a run from the touchdown that takes off before the start sample compared as in flight up to it); set in this
+(a run from the touchdown that takes off before the start sample compared as in flight up to it); ``--work-scale X``:
+``forward_selection.WORK_SCALE`` (the net-joint-work term's scale, session 26); ``--gate-order gap``:
+``workflow.GATE_ORDER`` and ``--push-off-signed``: ``identify.PUSH_OFF_SIGNED`` (session 26's options); set in this
 process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
@@ -183,6 +185,15 @@ def main() -> None:
                          "a loss and the push-off that replaces it tried together")
     ap.add_argument("--accept-step", action="store_true",
                     help="forward_selection.VELOCITY_FIT_ACCEPT = True (session 20): the velocity step checked")
+    ap.add_argument("--work-scale", type=float, default=None, metavar="X",
+                    help="forward_selection.WORK_SCALE = X: the net-joint-work term's scale, a share of the work the "
+                         "joints absorb per measured stance (default 1; session 26)")
+    ap.add_argument("--gate-order", choices=("log_ratio", "gap"), default=None,
+                    help="workflow.GATE_ORDER (session 26's option): gate the passing candidates by pooled held-out "
+                         "gap instead of mean log ratio")
+    ap.add_argument("--push-off-signed", action="store_true",
+                    help="identify.PUSH_OFF_SIGNED = True (session 26's option): a held-out stance's push-off scale "
+                         "may be negative")
     ap.add_argument("--gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = True (session 17's option): the gate also passes a candidate "
                          "significantly better on one sampled signal (Bonferroni over the 7) and worse on none; "
@@ -221,7 +232,7 @@ def main() -> None:
 
 def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """The stiffness gate's options, set in this process (a Dask worker would not see them)."""
-    from hop_impedance.discovery import forward_selection, identify, model, stiffness_gate
+    from hop_impedance.discovery import forward_selection, identify, model, stiffness_gate, workflow
 
     # (flag, module, constant, value or None when not given): each set in this process, so not with --scheduler
     for flag, module, name, value in (
@@ -235,6 +246,9 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--angle-terms", model, "ANGLE_TERMS", tuple(args.angle_terms.split(",")) if args.angle_terms else None),
             ("--energy-pairs", forward_selection, "ENERGY_PAIRS", True if args.energy_pairs else None),
             ("--accept-step", forward_selection, "VELOCITY_FIT_ACCEPT", True if args.accept_step else None),
+            ("--work-scale", forward_selection, "WORK_SCALE", args.work_scale),
+            ("--gate-order", workflow, "GATE_ORDER", args.gate_order),
+            ("--push-off-signed", identify, "PUSH_OFF_SIGNED", True if args.push_off_signed else None),
             ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
             ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None)):
         if value is None:
