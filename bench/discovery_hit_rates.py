@@ -52,8 +52,8 @@ stance simulated from the measured state D s after its touchdown, compared from 
 ``forward_selection.TWO_SEGMENT`` with it (session 23's sub-option: the run from the touchdown compared before the
 start sample, the late run from it), ``--two-segment-flight``: ``forward_selection.TWO_SEGMENT_FLIGHT`` with that
 (a run from the touchdown that takes off before the start sample compared as in flight up to it); ``--work-scale X``:
-``forward_selection.WORK_SCALE`` (the net-joint-work term's scale, session 26); ``--gate-order gap``:
-``workflow.GATE_ORDER`` and ``--push-off-signed``: ``identify.PUSH_OFF_SIGNED`` (session 26's options); set in this
+``forward_selection.WORK_SCALE`` (the net-joint-work term's scale, session 26; its ``--gate-order`` and
+``--push-off-signed``, measured and removed, run at commit 9b1492a); set in this
 process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
@@ -188,12 +188,6 @@ def main() -> None:
     ap.add_argument("--work-scale", type=float, default=None, metavar="X",
                     help="forward_selection.WORK_SCALE = X: the net-joint-work term's scale, a share of the work the "
                          "joints absorb per measured stance (default 1; session 26)")
-    ap.add_argument("--gate-order", choices=("log_ratio", "gap"), default=None,
-                    help="workflow.GATE_ORDER (session 26's option): gate the passing candidates by pooled held-out "
-                         "gap instead of mean log ratio")
-    ap.add_argument("--push-off-signed", action="store_true",
-                    help="identify.PUSH_OFF_SIGNED = True (session 26's option): a held-out stance's push-off scale "
-                         "may be negative")
     ap.add_argument("--gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = True (session 17's option): the gate also passes a candidate "
                          "significantly better on one sampled signal (Bonferroni over the 7) and worse on none; "
@@ -232,7 +226,7 @@ def main() -> None:
 
 def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """The stiffness gate's options, set in this process (a Dask worker would not see them)."""
-    from hop_impedance.discovery import forward_selection, identify, model, stiffness_gate, workflow
+    from hop_impedance.discovery import forward_selection, identify, model, stiffness_gate
 
     # (flag, module, constant, value or None when not given): each set in this process, so not with --scheduler
     for flag, module, name, value in (
@@ -247,8 +241,6 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--energy-pairs", forward_selection, "ENERGY_PAIRS", True if args.energy_pairs else None),
             ("--accept-step", forward_selection, "VELOCITY_FIT_ACCEPT", True if args.accept_step else None),
             ("--work-scale", forward_selection, "WORK_SCALE", args.work_scale),
-            ("--gate-order", workflow, "GATE_ORDER", args.gate_order),
-            ("--push-off-signed", identify, "PUSH_OFF_SIGNED", True if args.push_off_signed else None),
             ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
             ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None)):
         if value is None:

@@ -354,13 +354,6 @@ def touchdown_moments(spec: ModelSpec, coefs: np.ndarray, s: MeasuredStance) -> 
     return np.array([float(np.mean(s.moment_nm[keep, j] - feats[j][keep] @ coefs[j])) for j in range(3)])
 
 
-#: The held-out stance's push-off scale may be negative (:func:`per_stance_push_off`; session 26, off): a hopper
-#: that sets its push-off hop by hop to hold its hop height also brakes a hop that came in with too much energy (the
-#: outside generator's ``per_hop[].control.pushoff_A_Nm`` is -16 N m on hop 6 of
-#: ``time_dependent_activation+active_push_off+surface_compliance_1602``).
-PUSH_OFF_SIGNED = False
-
-
 def per_stance_push_off(spec: ModelSpec, coefs: np.ndarray, s: MeasuredStance) -> np.ndarray:
     """``coefs`` with the push-off amplitude scaled to stance ``s`` (a per-hop control input, a nuisance).
 
@@ -386,8 +379,7 @@ def per_stance_push_off(spec: ModelSpec, coefs: np.ndarray, s: MeasuredStance) -
         num += float(push @ rest)
         den += float(push @ push)
     out = np.array(coefs, float, copy=True)
-    scale = num / den if den > 0 else 1.0
-    out[:, k] *= scale if PUSH_OFF_SIGNED else max(scale, 0.0)
+    out[:, k] *= max(num / den, 0.0) if den > 0 else 1.0
     return out
 
 

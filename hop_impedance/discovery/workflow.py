@@ -26,14 +26,6 @@ from hop_impedance.recording import Recording
 SCHEMA = "hop_impedance.discover/1"
 MAX_STEPS = 4
 
-#: The order in which the candidates that passed the held-out test are gated (the first to pass the gate is named):
-#: ``"log_ratio"``, by their mean per-stance log gap ratio (sessions 8-25); ``"gap"``, by their pooled held-out gap
-#: (the smallest first: issue 16's "selection is by the cross-validated forward gap"). Session 26 (docs/discovery.md):
-#: on ``time_dependent_activation+active_push_off+surface_compliance_1602`` the surface ranks first by mean log
-#: ratio (3.24 against the activation's 3.15) while leaving two held-out stances failed (pooled gap 2.24 against
-#: 0.25).
-GATE_ORDER = "log_ratio"
-
 #: What separates look-alike effects (reported with an ambiguity).
 SEPARATING_EVIDENCE = {
     frozenset({"angle_dependent_stiffness", "time_dependent_activation"}):
@@ -274,7 +266,7 @@ def _gated(ev: fs.HeldOutEvaluator, fitted: tuple[ModelSpec, np.ndarray], scores
     :func:`hop_impedance.discovery.stiffness_gate.screen_factor`: uncorrected, not adopted) is the current
     model's k0 (``fitted``: the model and
     its coefficients identified on all stances) chosen through the simulation, then k0 of each passing
-    candidate in the order :data:`GATE_ORDER` sets until one beats the current model so
+    candidate in the order of its mean log gap ratio until one beats the current model so
     (:mod:`hop_impedance.discovery.stiffness_gate`); the figures go to ``selection.stiffness_through_simulation``,
     the searches' time to ``timing.stiffness_s``. With ``stiffness_gate.SHOOT_EFFECT_SIZE`` (session 10's
     trial, off) also the size of the effect each adds; ``stiffness_gate.FOLDS``: shot on training folds and
@@ -283,7 +275,7 @@ def _gated(ev: fs.HeldOutEvaluator, fitted: tuple[ModelSpec, np.ndarray], scores
     body split: same model and coefficients), whose search is then not repeated.
     """
     screen = stiffness_gate.screen_factor(n_candidates)
-    ok = sorted((sc for sc in scores if fs.passes(sc, screen)), key=_gate_rank)
+    ok = sorted((sc for sc in scores if fs.passes(sc, screen)), key=lambda sc: -sc.mean_log_ratio)
     if not ok:
         return [], {}
     t0 = time.perf_counter()
@@ -302,15 +294,6 @@ def _gated(ev: fs.HeldOutEvaluator, fitted: tuple[ModelSpec, np.ndarray], scores
         {"round": len(doc["selection"]["rounds"]), "current": shot.as_json(), "candidates": gates})
     timing["stiffness_s"].append(time.perf_counter() - t0)
     return [sc for sc in ok if gates.get(sc.effect, {}).get("passes")], gates
-
-
-def _gate_rank(sc: fs.ForwardScore) -> float:
-    """Sort key of :data:`GATE_ORDER` (smallest first)."""
-    if GATE_ORDER == "gap":
-        return float(np.mean(sc.runs.gaps))
-    if GATE_ORDER == "log_ratio":
-        return -sc.mean_log_ratio
-    raise ValueError(f"GATE_ORDER must be 'log_ratio' or 'gap', not {GATE_ORDER!r}")
 
 
 def _model_key(spec_fit: ModelSpec, coefs: np.ndarray) -> tuple:
