@@ -82,7 +82,7 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
         entry["omega0_rad_s"] = float(rec.stance.ref.omega0_rad_s[j])
         impedance[name] = entry
     start = sensors.start_ns
-    out = {
+    out: dict = {
         "index": rec.index,
         "touchdown_s": rec.t_touchdown_s,
         "takeoff_s": rec.t_takeoff_s,
