@@ -87,7 +87,7 @@ from hop_impedance.biomech.analysis import analyze_recording  # noqa: E402
 from hop_impedance.impedance.recording_fits import fit_recording_trial  # noqa: E402
 from hop_impedance.impedance.seed_findings import fig7_line  # noqa: E402
 from hop_impedance.simulation.fit_calibration import median_k0_k1, seed_model_fits, table2_k  # noqa: E402
-from hop_impedance.simulation.impedance_laws import TrunkBalance  # noqa: E402
+from hop_impedance.simulation.impedance_laws import BiarticularSpring, TrunkBalance  # noqa: E402
 from hop_impedance.simulation.scenarios import (  # noqa: E402
     SEED_LIKE_HOPPER_LAW_SCALE,
     SEED_LIKE_LAW_SCALE,
@@ -447,6 +447,18 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
                              "(HoppingConfig.passive_landing_s; the stances unchanged; default 0: the quintic)")
     parser.add_argument("--passive-takeoff", type=float, default=None, metavar="S",
                         help="the same for the flight's first S seconds (HoppingConfig.passive_takeoff_s)")
+    parser.add_argument("--biarticular", metavar="K[,RA,RK]",
+                        help="a passive knee-ankle (gastrocnemius-like) spring in stance: E = K/2 (RA d_ankle - RK "
+                             "d_knee)^2 about the touchdown angles, K N m/rad, RA and RK default 1 "
+                             "(impedance_laws.BiarticularSpring; hopping_config(biarticular=...); default none)")
+
+
+def biarticular_spring(text: str) -> BiarticularSpring:
+    """``--biarticular K[,RA,RK]`` as the law part (RA, RK default 1)."""
+    values = floats(text)
+    if len(values) not in (1, 3):
+        raise ValueError(f"--biarticular takes K or K,RA,RK, got {text!r}")
+    return BiarticularSpring(*values)
 
 
 def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
@@ -503,6 +515,9 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
         if getattr(args, f"passive_{phase}") is not None:
             options[f"passive_{phase}_s"] = getattr(args, f"passive_{phase}")
             said.append(f"passive {phase} {options[f'passive_{phase}_s']:g} s")
+    if getattr(args, "biarticular", None):
+        options["biarticular"] = biarticular_spring(args.biarticular)
+        said.append(f"biarticular spring {args.biarticular}")
     return options, f"scenarios.{'seed_like_hopper_options' if preset else 'seed_like_options'}(), " + ", ".join(said)
 
 
@@ -527,7 +542,8 @@ def main() -> None:
     variant = any((args.bell is not None, args.law_scale != "none",
                    args.pad, args.posture, args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS,
                    args.push_weights, args.law_scale_file, args.flight, args.landing, args.push_off_gain is not None,
-                   args.passive_landing is not None, args.passive_takeoff is not None, args.no_seed001, args.seed != 1))
+                   args.passive_landing is not None, args.passive_takeoff is not None, args.no_seed001, args.seed != 1,
+                   args.biarticular))
     # the table kept in docs/simulator.md: the bundled recordings' preset (--hopper seed-like --surface rigid) or the
     # library's default options; nothing else, so that the docs never show a variant as the simulator
     if args.write and (variant or (args.hopper, args.surface) not in WRITABLE):

@@ -12,6 +12,9 @@ moments, flexion-positive angles):
 - ``damping_j``        ``-(eq3_work_j + springs_left_j)``: what the law dissipated (>= 0; None with
   ``springs_left_j``);
 - ``trunk_balance_j``  work of the trunk-balance moment at the hip (0 without one);
+- ``biarticular_j``, ``biarticular_left_j`` (only with a
+  :class:`~hop_impedance.simulation.impedance_laws.BiarticularSpring` part): its work and the energy left in it at
+  take-off (conservative: the two add up to 0 but for the quadrature);
 - ``ground_j``         work of the surface on the foot, ``int (Fz dz_toe/dt + Fx dx_toe/dt) dt``
   (surface damping and sliding friction; the surface spring is unloaded at take-off);
 - ``e_touchdown_j``, ``e_takeoff_j`` and ``residual_j`` = E(take-off) - E(touchdown) - (sum of the
@@ -33,7 +36,7 @@ import numpy as np
 
 from hop_impedance.biomech.joint_angles import joint_angles
 from hop_impedance.simulation.dynamics import mechanical_energy_j
-from hop_impedance.simulation.impedance_laws import CompositeLaw, Eq3Law, PushOff
+from hop_impedance.simulation.impedance_laws import BiarticularSpring, CompositeLaw, Eq3Law, PushOff
 
 DEFAULT_DT_S = 2e-4
 
@@ -83,6 +86,12 @@ def stance_energy_budget(chain, rec, dt_s: float = DEFAULT_DT_S) -> dict:
         except NotImplementedError:
             springs = None
     e_td, e_to = _energy(chain, st.g[0], st.gd[0]), _energy(chain, st.g[-1], st.gd[-1])
+    biarticular = law_part(rec.law, BiarticularSpring)
+    extra = {}
+    if biarticular is not None:  # only then (older budgets stay the same)
+        extra = {"biarticular_j": work(part_moments_nm(biarticular, st)),
+                 "biarticular_left_j": float(biarticular.elastic_energy_j(st.rho_rad[-1], st.ref))}
+    residual = e_to - e_td - (push_j + eq3_j + trunk_j + ground_j)
     return {
         "push_off_j": push_j,
         "eq3_work_j": eq3_j,
@@ -92,7 +101,8 @@ def stance_energy_budget(chain, rec, dt_s: float = DEFAULT_DT_S) -> dict:
         "ground_j": ground_j,
         "e_touchdown_j": e_td,
         "e_takeoff_j": e_to,
-        "residual_j": e_to - e_td - (push_j + eq3_j + trunk_j + ground_j),
+        "residual_j": residual - extra.get("biarticular_j", 0.0),
+        **extra,
     }
 
 

@@ -78,7 +78,14 @@ from hop_impedance.simulation.dynamics import (
     internal_mass_matrix,
 )
 from hop_impedance.simulation.ground import Ground
-from hop_impedance.simulation.impedance_laws import CompositeLaw, Eq3Law, ImpedanceLaw, PushOff, TrunkBalance
+from hop_impedance.simulation.impedance_laws import (
+    BiarticularSpring,
+    CompositeLaw,
+    Eq3Law,
+    ImpedanceLaw,
+    PushOff,
+    TrunkBalance,
+)
 from hop_impedance.simulation.passive_flight import passive_duration_s, passive_knots
 from hop_impedance.simulation.stance import (
     DEFAULT_ATOL,
@@ -331,16 +338,22 @@ def returned_spring_energy_j(law: ImpedanceLaw, ref, rho_takeoff: np.ndarray, rh
     U is the Eq. 3 part's stored energy about its touchdown reference ``ref``
     (:meth:`Eq3Law.elastic_energy_j`); the spring keeps acting in flight until the next touchdown,
     where the reference is reset and what is left, U(next touchdown), is lost ("springs not
-    returned"). A law without a conservative Eq. 3 part (activation, k3) returns nothing (0).
+    returned"). A law without a conservative Eq. 3 part (activation, k3) returns nothing (0) from it. A
+    :class:`~hop_impedance.simulation.impedance_laws.BiarticularSpring` part (conservative) returns its own the same
+    way, added.
     """
     eq3 = law if isinstance(law, Eq3Law) else (law.part(Eq3Law) if isinstance(law, CompositeLaw) else None)
-    if eq3 is None:
-        return 0.0
-    try:
-        return float(eq3.elastic_energy_j(np.asarray(rho_takeoff, float), ref)
-                     - eq3.elastic_energy_j(np.asarray(rho_touchdown, float), ref))
-    except NotImplementedError:
-        return 0.0
+    biarticular = law.part(BiarticularSpring) if isinstance(law, CompositeLaw) else None
+    returned = 0.0
+    if eq3 is not None:
+        try:
+            returned = float(eq3.elastic_energy_j(np.asarray(rho_takeoff, float), ref)
+                             - eq3.elastic_energy_j(np.asarray(rho_touchdown, float), ref))
+        except NotImplementedError:
+            returned = 0.0
+    if biarticular is not None:
+        returned += float(biarticular.elastic_energy_j(rho_takeoff, ref) - biarticular.elastic_energy_j(rho_touchdown, ref))
+    return returned
 
 
 def _toe_row(chain: Chain, q: np.ndarray, held: int | None = None) -> np.ndarray:

@@ -11,6 +11,7 @@ Laws
   integrated as in Eqs. 4-5 (constant stiffness is the special case with only
   ``k0``), optionally with a time-based activation that scales its elastic part.
 - :class:`PushOff`: an extensor moment pulse with its own time course late in stance.
+- :class:`BiarticularSpring`: a passive knee-ankle (gastrocnemius-like) spring, conservative (off by default).
 - :class:`CompositeLaw`: the sum of parts.
 
 Integration of Eq. 3 (done here in closed form, independently of the fit code)
@@ -390,6 +391,68 @@ class CompositeLaw(ImpedanceLaw):
 
     def to_dict(self) -> dict:  # noqa: D102
         return {"type": "composite", "parts": [p.to_dict() for p in self.parts]}
+
+
+@dataclass(frozen=True)
+class BiarticularSpring(ImpedanceLaw):
+    """A passive two-joint spring coupling knee and ankle, like the gastrocnemius (issue 17, session 26; off by
+    default: ``hopping_config(biarticular=...)``).
+
+    The gastrocnemius crosses the knee behind its axis and the ankle behind its axis: it is a knee flexor and an
+    ankle plantarflexor, and it lengthens with ankle dorsiflexion and with knee extension. In this package's angles
+    (every rho increases with flexion, ankle rho with dorsiflexion) its length changes from touchdown by
+    ``x = r_a (rho_ankle - rho0_ankle) - r_k (rho_knee - rho0_knee)`` (times a length unit), and a linear spring on it
+    stores
+
+        E = k x^2 / 2,     M_j = dE/drho_j:   M_ankle = k r_a x,   M_knee = -k r_k x,   M_hip = 0
+
+    (extensor positive: ``M = dE/drho`` as for Eq. 3's ``k0 dr``). Stretched (``x > 0``) it is an ankle
+    plantarflexor and a knee flexor, the muscle's anatomy. It resists the leg's zig-zag direction, ankle and knee
+    turning opposite ways (``(d_ankle, d_knee)`` along ``(r_a, -r_k)``: the knee flexing more while the ankle flexes
+    less, session 25 (helper)'s soft direction at 1.53 Hz, or the reverse), and leaves free the co-flexion with
+    ``d_knee / d_ankle = r_a / r_k``. Conservative (a potential; no states), about each stance's touchdown angles,
+    acting in stance only like every law part. The net joint moments, and so whatever the analysis fits, include
+    it; the truth file states it (``law`` and each stance's ``biarticular``, ``biarticular_moments_nm``).
+
+    Attributes
+    ----------
+    stiffness_nm_rad : float
+        k (N m/rad of ``x``), >= 0.
+    ankle_arm, knee_arm : float
+        r_a, r_k: the spring's moment arms at ankle and knee in a common length unit (dimensionless weights of the
+        two joints' rotation; the gastrocnemius' are about 5 and 2-4 cm), >= 0.
+    """
+
+    stiffness_nm_rad: float
+    ankle_arm: float = 1.0
+    knee_arm: float = 1.0
+
+    def __post_init__(self) -> None:
+        values = (self.stiffness_nm_rad, self.ankle_arm, self.knee_arm)
+        if not all(np.isfinite(v) and v >= 0 for v in values):
+            raise ValueError(f"biarticular spring needs finite k, r_a, r_k >= 0, got {values}")
+
+    @property
+    def arms(self) -> np.ndarray:
+        """dx/drho per joint (ankle, knee, hip): ``[r_a, -r_k, 0]``."""
+        return np.array([self.ankle_arm, -self.knee_arm, 0.0])
+
+    def stretch_rad(self, rho, ref: TouchdownReference) -> np.ndarray:
+        """``x`` (rad), shape (...)."""
+        return (np.asarray(rho, float) - ref.rho0_rad) @ self.arms
+
+    def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102 (see base class)
+        x = self.stretch_rad(rho, ref)
+        shape = np.broadcast_shapes(np.shape(t_s), np.shape(rho)[:-1])
+        return np.broadcast_to(self.stiffness_nm_rad * x[..., None] * self.arms, shape + (3,))
+
+    def elastic_energy_j(self, rho, ref):  # noqa: D102
+        return 0.5 * self.stiffness_nm_rad * self.stretch_rad(rho, ref) ** 2
+
+    def to_dict(self) -> dict:  # noqa: D102
+        return {"type": "biarticular", "stiffness_nm_rad": self.stiffness_nm_rad, "ankle_arm": self.ankle_arm,
+                "knee_arm": self.knee_arm,
+                "law": "x = r_a (rho_ankle - rho0) - r_k (rho_knee - rho0); M_ankle += k r_a x, M_knee += -k r_k x"}
 
 
 @dataclass(frozen=True)

@@ -151,7 +151,8 @@ def anticipated_stiffening(freq_hz: float, options: dict, effects: Effects = Eff
 
     def stance_s(ground, factor: float) -> float:
         scale = with_stiffening(options, freq_hz, factor)["law_scale"]
-        passive = passive_law(freq_hz, effects, options.get("hip_trunk_spring_nm_rad", 0.0), scale)
+        passive = passive_law(freq_hz, effects, options.get("hip_trunk_spring_nm_rad", 0.0), scale,
+                              options.get("biarticular"))
         return nominal_stance_s(chain, passive, ground, cfg.touchdown_rho_rad, freq_hz)
 
     target = stance_s(reference, 1.0)

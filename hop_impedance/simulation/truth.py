@@ -21,7 +21,10 @@ Layout (format ``hop_impedance.simulation.truth/1``)
   (``trunk_balance_moments_nm``, zero without one; its law and the touchdown trunk
   angle q4 are in the stance's ``trunk_balance``: the whole hip law is the
   Eq. 3 hip law plus that term), and GRF ``[Fx, Fz]`` (N) at every force-plate
-  sample inside the stance (``t_s`` in recording time).
+  sample inside the stance (``t_s`` in recording time). Only with a passive knee-ankle spring
+  (:class:`~hop_impedance.simulation.impedance_laws.BiarticularSpring`, off by default) the stance has
+  ``biarticular`` (its law) and ``samples.biarticular_moments_nm``, its part of the net moments (the
+  ankle and knee laws are then the Eq. 3 law plus that term).
 
 - ``stances[i].energy_j``: the hop's energy budget (J): push-off work, Eq. 3 work, springs left at
   take-off, damping, trunk-balance work, ground work, energy at touchdown / take-off, bookkeeping
@@ -46,7 +49,7 @@ from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.recording import Subject
 from hop_impedance.simulation.energy_budget import law_part, part_moments_nm, trial_energy_budget
 from hop_impedance.simulation.hopping_trial import HoppingTrial, StanceRecord, leg_stiffness_n_per_m, simulate_resample
-from hop_impedance.simulation.impedance_laws import COEFFICIENT_NAMES, Eq3Law, PushOff
+from hop_impedance.simulation.impedance_laws import COEFFICIENT_NAMES, BiarticularSpring, Eq3Law, PushOff
 from hop_impedance.simulation.sensors import SensorConfig, sample_times_s, stamps_ns
 from hop_impedance.simulation.whole_hip import whole_hip_reference
 
@@ -79,7 +82,7 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
         entry["omega0_rad_s"] = float(rec.stance.ref.omega0_rad_s[j])
         impedance[name] = entry
     start = sensors.start_ns
-    return {
+    out: dict = {
         "index": rec.index,
         "touchdown_s": rec.t_touchdown_s,
         "takeoff_s": rec.t_takeoff_s,
@@ -111,6 +114,11 @@ def stance_truth(trial: HoppingTrial, rec: StanceRecord, sensors: SensorConfig, 
             "grf_n": _round(st.grf_n),
         },
     }
+    biarticular = law_part(rec.law, BiarticularSpring)
+    if biarticular is not None:  # only then (older truth files stay the same)
+        out["biarticular"] = biarticular.to_dict()
+        out["samples"]["biarticular_moments_nm"] = _round(part_moments_nm(biarticular, st))
+    return out
 
 
 def _flight_model(cfg) -> str:
