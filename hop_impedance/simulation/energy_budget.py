@@ -36,18 +36,9 @@ import numpy as np
 
 from hop_impedance.biomech.joint_angles import joint_angles
 from hop_impedance.simulation.dynamics import mechanical_energy_j
-from hop_impedance.simulation.impedance_laws import BiarticularSpring, CompositeLaw, Eq3Law, PushOff
+from hop_impedance.simulation.impedance_laws import BiarticularSpring, Eq3Law, PushOff, law_part
 
 DEFAULT_DT_S = 2e-4
-
-
-def law_part(law, kind):
-    """The first part of ``law`` of type ``kind`` (the law itself if it is one), or None."""
-    if isinstance(law, kind):
-        return law
-    if isinstance(law, CompositeLaw):
-        return law.part(kind)
-    return None
 
 
 def part_moments_nm(part, st) -> np.ndarray:

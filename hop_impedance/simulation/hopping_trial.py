@@ -85,6 +85,7 @@ from hop_impedance.simulation.impedance_laws import (
     ImpedanceLaw,
     PushOff,
     TrunkBalance,
+    law_part,
 )
 from hop_impedance.simulation.passive_flight import passive_duration_s, passive_knots
 from hop_impedance.simulation.stance import (
@@ -276,11 +277,7 @@ class HoppingConfig:
 
 def push_off_part(law: ImpedanceLaw) -> PushOff | None:
     """The push-off part of a law, if any."""
-    if isinstance(law, PushOff):
-        return law
-    if isinstance(law, CompositeLaw):
-        return law.part(PushOff)
-    return None
+    return law_part(law, PushOff)
 
 
 def scale_push_off(law: ImpedanceLaw, scale: float) -> ImpedanceLaw:
@@ -342,8 +339,7 @@ def returned_spring_energy_j(law: ImpedanceLaw, ref, rho_takeoff: np.ndarray, rh
     :class:`~hop_impedance.simulation.impedance_laws.BiarticularSpring` part (conservative) returns its own the same
     way, added.
     """
-    eq3 = law if isinstance(law, Eq3Law) else (law.part(Eq3Law) if isinstance(law, CompositeLaw) else None)
-    biarticular = law.part(BiarticularSpring) if isinstance(law, CompositeLaw) else None
+    eq3, biarticular = law_part(law, Eq3Law), law_part(law, BiarticularSpring)
     returned = 0.0
     if eq3 is not None:
         try:

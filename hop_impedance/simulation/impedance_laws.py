@@ -298,7 +298,7 @@ def with_prepared_stiffening(law: ImpedanceLaw, times_s, expected_dr_rad) -> Com
     moments are the same as ``law``'s.
     """
     parts = law.parts if isinstance(law, CompositeLaw) else (law,)
-    eq3 = next((p for p in parts if isinstance(p, Eq3Law)), None)
+    eq3 = law_part(law, Eq3Law)
     if eq3 is None:
         raise ValueError("with_prepared_stiffening needs an Eq3Law part")
     without_k1 = replace(eq3, k1=np.zeros(3))
@@ -391,6 +391,15 @@ class CompositeLaw(ImpedanceLaw):
 
     def to_dict(self) -> dict:  # noqa: D102
         return {"type": "composite", "parts": [p.to_dict() for p in self.parts]}
+
+
+def law_part(law: ImpedanceLaw, kind: type[_LawT]) -> _LawT | None:
+    """The first part of ``law`` of type ``kind`` (the law itself if it is one), or None."""
+    if isinstance(law, kind):
+        return law
+    if isinstance(law, CompositeLaw):
+        return law.part(kind)
+    return None
 
 
 @dataclass(frozen=True)

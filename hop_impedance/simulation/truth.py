@@ -47,9 +47,9 @@ import numpy as np
 from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.biomech.joint_angles import JOINT_NAMES
 from hop_impedance.recording import Subject
-from hop_impedance.simulation.energy_budget import law_part, part_moments_nm, trial_energy_budget
+from hop_impedance.simulation.energy_budget import part_moments_nm, trial_energy_budget
 from hop_impedance.simulation.hopping_trial import HoppingTrial, StanceRecord, leg_stiffness_n_per_m, simulate_resample
-from hop_impedance.simulation.impedance_laws import COEFFICIENT_NAMES, BiarticularSpring, Eq3Law, PushOff
+from hop_impedance.simulation.impedance_laws import COEFFICIENT_NAMES, BiarticularSpring, Eq3Law, PushOff, law_part
 from hop_impedance.simulation.sensors import SensorConfig, sample_times_s, stamps_ns
 from hop_impedance.simulation.whole_hip import whole_hip_reference
 
