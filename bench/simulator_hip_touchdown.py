@@ -71,11 +71,61 @@ def moment_lines(analysis, truth: dict) -> list[str]:
     return lines
 
 
+def path_lines(analysis) -> list[str]:
+    """Per stance after the first (``--path``): knee and hip angle relative to touchdown (rad) at the hip's maximal
+    moment, its least and largest value in stance and at take-off, and the hip's maximal moment (analysis)."""
+    lines = []
+    measured = [s for s in analysis.stances if s.complete and s.joints is not None][1:]
+    for i, s in enumerate(measured):
+        d = s.joints.angle_rad - s.joints.angle_rad[0]
+        peak = int(np.argmax(s.joints.moment_nm[:, 2]))
+        cells = [f"{name} at hip peak {d[peak, j]:+.3f}, range {d[:, j].min():+.3f}..{d[:, j].max():+.3f}, "
+                 f"take-off {d[-1, j]:+.3f}" for name, j in (("knee", 1), ("hip", 2))]
+        lines.append(f"stance {i + 2} (path): " + " | ".join(cells) +
+                     f" | hip peak {s.joints.moment_nm[peak, 2]:.1f} N m at {s.joints.time_s[peak] / s.joints.time_s[-1]:.2f}"
+                     " of stance")
+    return lines
+
+
+def _spring_cells(samples: dict) -> str:
+    """The biarticular spring's ankle and knee moments (N m) at the stance's middle and at take-off, when present."""
+    if "biarticular_moments_nm" not in samples:
+        return ""
+    m = np.asarray(samples["biarticular_moments_nm"], float)
+    mid = m[len(m) // 2]
+    return (f"; spring ankle, knee mid-stance {mid[0]:+.1f}, {mid[1]:+.1f}, take-off {m[-1, 0]:+.1f}, {m[-1, 1]:+.1f}"
+            f" N m, least knee {m[:, 1].min():+.1f}, largest {m[:, 1].max():+.1f}")
+
+
+def part_lines(truth: dict) -> list[str]:
+    """Per stance after the first (``--path``): the simulator's hip moment at its maximum and its parts there (push-off,
+    trunk balance, the rest = Eq. 3 hip law), the hip's push-off peak, the stance's energy budget (J) and the joint
+    rates at take-off (the trunk-held flight lands along them reversed, ``hopping_trial.flight_segment_rates``)."""
+    lines = []
+    for st in truth["stances"][1:]:
+        sm, e = st["samples"], st["energy_j"]
+        hip = np.asarray(sm["moments_nm"], float)[:, 2]
+        push = np.asarray(sm["push_off_moments_nm"], float)[:, 2]
+        balance = np.asarray(sm["trunk_balance_moments_nm"], float)[:, 2]
+        k = int(np.argmax(hip))
+        left = e.get("biarticular_left_j")
+        lines.append(f"stance {st['index'] + 1} (simulator): hip max {hip[k]:5.1f} N m = push-off {push[k]:5.1f} + "
+                     f"balance {balance[k]:5.1f} + law {hip[k] - push[k] - balance[k]:5.1f}; hip push-off peak "
+                     f"{push.max():5.1f}; push-off {e['push_off_j']:5.1f} J, damping {e['damping_j'] or 0:5.1f}, springs left "
+                     f"{e['springs_left_j'] or 0:5.1f}" + ("" if left is None else f", spring left {left:5.1f}") +
+                     f", flight {e.get('flight_j', float('nan')):6.1f}; rates at take-off (rad/s) ankle, knee, hip "
+                     + ", ".join(f"{w:+.2f}" for w in np.asarray(sm["omega_rad_s"], float)[-1])
+                     + _spring_cells(sm))
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     s17.add_variant_arguments(parser)
     parser.add_argument("--freq", type=float, default=1.53, help="the trial's target frequency (Hz; default 1.53)")
     parser.add_argument("--seed", type=int, default=1, help="the trial's seed (default 1)")
+    parser.add_argument("--path", action="store_true", help="also the knee and hip angle paths relative to touchdown "
+                        "(session 27: what the hip's fit sees with the biarticular spring)")
     parser.set_defaults(seed001_keep_pad=False)  # variant_options' --pad line reads it
     args = parser.parse_args()
     t0 = time.perf_counter()
@@ -84,7 +134,8 @@ def main() -> None:
     rec, truth = simulate_recording(args.freq, args.surface, 10, seed=args.seed, sensors=noise_free(SensorConfig()),
                                     **options)
     analysis = analyze_recording(rec)
-    print("\n".join(fit_lines(analysis) + moment_lines(analysis, truth)))
+    extra = path_lines(analysis) + part_lines(truth) if args.path else []
+    print("\n".join(fit_lines(analysis) + moment_lines(analysis, truth) + extra))
     print(f"stopped: {truth['stop_reason']}" if truth["stop_reason"] else "all hops made")
     print(f"({time.perf_counter() - t0:.0f} s)")
 
