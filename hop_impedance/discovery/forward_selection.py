@@ -181,17 +181,6 @@ TWO_SEGMENT = False
 #: 5/8 exact and 0/6 nulls as the default, but the angle law named on 3/5 of the second generator's nulls (a law soft
 #: at touchdown avoids the bounce off the smeared touchdown state whatever the data): not the default.
 TWO_SEGMENT_FLIGHT = False
-#: Session 27 (an option, off; docs/discovery.md "Session 27 (helper)"): the net-joint-work term of a held-out stance
-#: compares the simulated work with the measured work over the same samples, the ones compared (:func:`_net_works_j`),
-#: not with the whole measured stance. Why: the seven signals are compared over those samples and the duration term
-#: carries the take-off's timing; a simulation that leaves the ground early was charged a second time through the
-#: work the measured stance does after it (the springs' energy not yet given back), and with :data:`WORK_SCALE` 0.25
-#: that double count outweighs the signals on our simulator's bundled 2.2 Hz trial (every model 23-69 ms early there).
-#: A simulation that runs long is unchanged (its work is over the measured samples either way). Not with
-#: :data:`TWO_SIDED_DURATION` or :data:`TWO_SEGMENT` (their own work spans). The energy balance of the push-off's and
-#: damping's admissibility (:func:`physics_evidence`) is then over the samples each run reached too
-#: (:func:`reached_works_j`).
-WORK_OVER_COMPARED = False
 #: A loss and its source: (loss, source), identified in that order.
 PAIRS: tuple[tuple[str, str], ...] = (("surface_compliance", "active_push_off"), ("joint_damping", "active_push_off"))
 #: Scale of the fitted change of (toe vz m/s, q1..q4 rad/s) and its Gaussian prior SD (same units).
@@ -663,8 +652,7 @@ def _simulated_work_j(sim: StanceSimulation, n: int | None, empty: float = np.na
 def _net_works_j(sim, s: MeasuredStance, n: int) -> tuple[float, float]:
     """The simulated net joint work of :func:`_gap_of` (over the whole simulated stance with
     :data:`TWO_SIDED_DURATION`, else over the ``n`` samples compared) and the measured work it is compared with (over
-    the measured samples from the first compared one on; with :data:`WORK_OVER_COMPARED` only over the compared ones).
-    With :class:`TwoSegmentRun` the touchdown run's over its
+    the measured samples from the first compared one on). With :class:`TwoSegmentRun` the touchdown run's over its
     samples (up to ``k``) plus the late run's, against the measured over the same samples: the whole stance unless
     the touchdown run ended before ``k`` (then without the samples between)."""
     if isinstance(sim, TwoSegmentRun):
@@ -675,8 +663,7 @@ def _net_works_j(sim, s: MeasuredStance, n: int) -> tuple[float, float]:
         measured = measured_net_work_j(s, 0, early) + measured_net_work_j(s, sim.k)
         return _simulated_work_j(sim.early, None, 0.0) + late, measured
     k = start_index(s) if sim.start_s > 0 else 0
-    stop = k + n if WORK_OVER_COMPARED and not TWO_SIDED_DURATION else None
-    return _simulated_work_j(sim, None if TWO_SIDED_DURATION else n), measured_net_work_j(s, k, stop)
+    return _simulated_work_j(sim, None if TWO_SIDED_DURATION else n), measured_net_work_j(s, k)
 
 
 def _run_one(task: tuple) -> dict:
@@ -829,20 +816,6 @@ def simulated_mean(x: np.ndarray) -> float | None:
     return float(np.mean(x[ok])) if ok.any() else None
 
 
-def reached_works_j(trial: MeasuredTrial, runs: HeldOutRuns, whole: np.ndarray) -> np.ndarray:
-    """The measured net work each held-out run's simulated work is set against in the energy balance: ``whole``
-    (:func:`measured_net_works_j` over the compared samples), or with :data:`WORK_OVER_COMPARED` (and neither
-    :data:`TWO_SIDED_DURATION` nor :data:`SIMULATE_FROM_S`) the measured work over the samples the run reached (its
-    one-sided duration error gives where it ended)."""
-    if not WORK_OVER_COMPARED or TWO_SIDED_DURATION or SIMULATE_FROM_S is not None:
-        return whole
-    out = []
-    for s, d, w in zip(trial.stances, runs.duration_error_s, whole):
-        stop = int(np.searchsorted(s.t_s, s.t_s[-1] + d + 1e-9, side="right")) if np.isfinite(d) and d < 0 else None
-        out.append(w if stop is None else measured_net_work_j(s, 0, stop))
-    return np.array(out)
-
-
 def physics_evidence(trial: MeasuredTrial, current: HeldOutRuns, cand: HeldOutRuns) -> dict:
     """Energy balance, stance-to-stance variation, flight force and latency of one candidate."""
     w_meas = measured_net_works_j(trial)
@@ -857,8 +830,8 @@ def physics_evidence(trial: MeasuredTrial, current: HeldOutRuns, cand: HeldOutRu
                                       "p_positive": one_sided_t(w_meas)},
         "simulated_net_joint_work_j": {"mean": simulated_mean(cand.net_work_j),
                                        "per_stance": np.round(cand.net_work_j, 2).tolist()},
-        "work_mismatch_j": {"candidate": simulated_mean(np.abs(cand.net_work_j - reached_works_j(trial, cand, w_compared))),
-                            "current": simulated_mean(np.abs(current.net_work_j - reached_works_j(trial, current, w_compared)))},
+        "work_mismatch_j": {"candidate": simulated_mean(np.abs(cand.net_work_j - w_compared)),
+                            "current": simulated_mean(np.abs(current.net_work_j - w_compared))},
         "per_stance_gap_current": np.round(current.gaps, 5).tolist(),
         "per_stance_gap_candidate": np.round(cand.gaps, 5).tolist(),
         "stance_to_stance_cv_of_gap_ratio": float(np.std(cand.gaps / current.gaps) / np.mean(cand.gaps / current.gaps))
