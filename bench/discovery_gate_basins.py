@@ -124,6 +124,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--doc", action="append", default=[], help="discover --json document (repeatable)")
     ap.add_argument("--x", type=float, default=0.25, help="the second WORK_SCALE the points are scored at")
     ap.add_argument("--final", action="store_true", help="points of final_gap_through_simulation")
+    ap.add_argument("--factors", action="append", default=[], metavar="A,K,H",
+                    help="also k0 factors (ankle, knee, hip) on each fold's regression k0 (repeatable)")
     ap.add_argument("--two-sided", action="store_true", help="also the two-sided take-off error")
     ap.add_argument("--lm", type=float, action="append", default=[], metavar="X",
                     help="LM search with the work term at X from the regression and each document's baseline shot")
@@ -142,7 +144,9 @@ def main(argv: list[str] | None = None) -> None:
         for f, (train, test) in enumerate(split):
             _, c = identify(spec, trial, [s for s in trial.stances if s.index in train])
             print(f"fold {f}: train {train}, held out {test}, regression k0 {c[:, col]}")
-            for name, fac in doc_points(docs, args.final, f, c[:, col]).items():
+            points = doc_points(docs, args.final, f, c[:, col])
+            points.update({f"factors {v}": np.array(v.split(","), float) for v in args.factors})
+            for name, fac in points.items():
                 report_point(ev, spec, c, train, test, name, fac, args.x, args.two_sided)
         for x in args.lm:
             lm_from_docs(ev, spec, trial, split, docs, x)
