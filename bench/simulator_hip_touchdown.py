@@ -119,17 +119,38 @@ def part_lines(truth: dict) -> list[str]:
     return lines
 
 
+def landing_from_law(args, options: dict, law_file: str) -> tuple[float, ...]:
+    """Segment rates at hop 2's touchdown (rad/s) of the same variant with ``law_file``'s law and no spring
+    (``--landing-from-law``): used as ``landing_rates_rad_s``, every landing of the probed trial goes along them."""
+    from hop_impedance.simulation.hopping_trial import simulate_hopping
+    from hop_impedance.simulation.scenarios import hopping_config
+
+    other = {k: v for k, v in options.items() if k != "biarticular"}
+    other["law_scale"] = s17.read_law_scale(law_file)
+    chain, config = hopping_config(args.freq, args.surface, 3, **other)
+    trial = simulate_hopping(chain, config, seed=args.seed)
+    return tuple(float(v) for v in trial.stances[1].touchdown.gd[2:])
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     s17.add_variant_arguments(parser)
     parser.add_argument("--freq", type=float, default=1.53, help="the trial's target frequency (Hz; default 1.53)")
     parser.add_argument("--seed", type=int, default=1, help="the trial's seed (default 1)")
+    parser.add_argument("--landing-from-law", metavar="LAW.json", default=None,
+                        help="land every hop along the touchdown segment rates of this law's trial without the spring "
+                             "(HoppingConfig.landing_rates_rad_s; session 27's probe: does the landing alone move the "
+                             "hip's fit?)")
     parser.add_argument("--path", action="store_true", help="also the knee and hip angle paths relative to touchdown "
                         "(session 27: what the hip's fit sees with the biarticular spring)")
     parser.set_defaults(seed001_keep_pad=False)  # variant_options' --pad line reads it
     args = parser.parse_args()
     t0 = time.perf_counter()
     options, said = s17.variant_options(args)
+    if args.landing_from_law:
+        options["landing_rates_rad_s"] = landing_from_law(args, options, args.landing_from_law)
+        said += f", landing along {args.landing_from_law}'s hop-2 touchdown rates " + \
+            ", ".join(f"{v:+.2f}" for v in options["landing_rates_rad_s"])
     print(f"{said}; {args.freq:g} Hz, seed {args.seed}, noise-free 10 hops")
     rec, truth = simulate_recording(args.freq, args.surface, 10, seed=args.seed, sensors=noise_free(SensorConfig()),
                                     **options)
