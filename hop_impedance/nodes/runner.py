@@ -401,8 +401,10 @@ def start_children(names, cfg: PipelineConfig, log_dir: Path) -> dict[str, subpr
 #: Seconds a node process gets to exit after SIGINT before it is killed. On a quiet machine every node exits in
 #: well under one; the recorder finishes its file on the way out, and a kill loses the chunk in progress (up to its
 #: last 0.5 s flush). Sessions 1-17 gave 5 s; a CI run under load (session 17, load 5-8) found the file one stance
-#: summary short of the ten the recorder had acknowledged, as a kill inside that grace would leave it. A longer grace
-#: costs nothing when the nodes exit, and :func:`recorder_shortfall` catches a short file whatever the cause.
+#: summary short of the ten the recorder had acknowledged, read then as a kill inside that grace. Session 26's CI
+#: found the same with no node killed: the cause was rclpy's SIGINT raising ``KeyboardInterrupt`` inside the
+#: recorder's MCAP write (mended by ``common.StopRequest``, session 27). A longer grace costs nothing when the nodes
+#: exit, and :func:`recorder_shortfall` catches a short file whatever the cause.
 STOP_GRACE_S = 20.0
 
 
