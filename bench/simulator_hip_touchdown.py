@@ -54,10 +54,15 @@ def fit_lines(analysis) -> list[str]:
     return lines
 
 
+def measured_after_first(analysis) -> list:
+    """The analysis' complete stances with joint data, after the first (it lands from the lead-in)."""
+    return [s for s in analysis.stances if s.complete and s.joints is not None][1:]
+
+
 def moment_lines(analysis, truth: dict) -> list[str]:
     """Per stance after the first: the analysis' hip moment at touchdown and +20 ms, the simulator's and its balance part."""
     lines = []
-    measured = [s for s in analysis.stances if s.complete and s.joints is not None][1:]
+    measured = measured_after_first(analysis)
     for i, s in enumerate(measured):
         m = s.joints.moment_nm[:, 2]
         k = int(np.searchsorted(s.joints.time_s, 0.02))
@@ -75,7 +80,7 @@ def path_lines(analysis) -> list[str]:
     """Per stance after the first (``--path``): knee and hip angle relative to touchdown (rad) at the hip's maximal
     moment, its least and largest value in stance and at take-off, and the hip's maximal moment (analysis)."""
     lines = []
-    measured = [s for s in analysis.stances if s.complete and s.joints is not None][1:]
+    measured = measured_after_first(analysis)
     for i, s in enumerate(measured):
         d = s.joints.angle_rad - s.joints.angle_rad[0]
         peak = int(np.argmax(s.joints.moment_nm[:, 2]))
