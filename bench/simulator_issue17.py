@@ -430,6 +430,9 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--push-weights", metavar="A,K,H",
                         help="the push-off's amplitude per joint in units of scenarios.PUSH_OFF_BASE_NM instead of 1,0.6,0.3 "
                              "(a negative knee share: the gastrocnemius' knee flexor moment)")
+    parser.add_argument("--push-lags", metavar="A,K,H",
+                        help="per joint, the fraction of the push-off's window by which its push starts later, ending "
+                             "with the others (impedance_laws.PushOff.lag_fraction; default 0,0,0)")
     parser.add_argument("--flight", choices=("prescribed", "energy_keeping", "trunk_held"), default=None,
                         help="the flight model (hopping_trial.py): energy_keeping returns the segments' motion and the "
                              "springs' energy at take-off at the next touchdown instead of discarding them (issue 17: "
@@ -502,6 +505,9 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     if args.push_weights:
         options["push_weights"] = floats(args.push_weights, 3)
         said.append(f"push-off weights {args.push_weights}")
+    if getattr(args, "push_lags", None):
+        options["push_lags"] = floats(args.push_lags, 3)
+        said.append(f"push-off lags {args.push_lags}")
     if args.flight:
         options["flight"] = args.flight
         said.append(f"flight {args.flight}")
@@ -543,7 +549,7 @@ def main() -> None:
                    args.pad, args.posture, args.trunk, args.push_timing, args.contact_ahead is not None, freqs != FREQS,
                    args.push_weights, args.law_scale_file, args.flight, args.landing, args.push_off_gain is not None,
                    args.passive_landing is not None, args.passive_takeoff is not None, args.no_seed001, args.seed != 1,
-                   args.biarticular))
+                   args.biarticular, args.push_lags))
     # the table kept in docs/simulator.md: the bundled recordings' preset (--hopper seed-like --surface rigid) or the
     # library's default options; nothing else, so that the docs never show a variant as the simulator
     if args.write and (variant or (args.hopper, args.surface) not in WRITABLE):

@@ -317,37 +317,61 @@ class PushOff(ImpedanceLaw):
     """Active extensor moment late in stance, fixed in time since touchdown.
 
     ``M(t) = A sin^2(pi (t - onset) / duration)`` for ``onset <= t <= onset + duration``,
-    zero otherwise; ``A`` per joint (N m, >= 0: extensor). It resupplies the
-    energy that damping and the ground dissipate; the hopping controller sets
+    zero otherwise; ``A`` per joint (N m, >= 0: extensor; a negative share is a flexor). It
+    resupplies the energy that damping and the ground dissipate; the hopping controller sets
     ``A`` hop by hop.
+
+    ``lag_fraction`` (per joint, in [0, 1), default 0: every joint together): a joint's push starts that
+    fraction of ``duration`` later and ends with the others, ``sin^2`` over its own shorter window (issue 17,
+    session 28: the knee's extensors finishing the push after the ankle's; off by default).
     """
 
     amplitude_nm: np.ndarray
     onset_s: float
     duration_s: float
+    lag_fraction: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "amplitude_nm", _as3(self.amplitude_nm))
+        object.__setattr__(self, "lag_fraction", _as3(self.lag_fraction))
         if not (self.onset_s >= 0 and self.duration_s > 0):
             raise ValueError(f"push-off needs onset_s >= 0 and duration_s > 0, got {self.onset_s}, {self.duration_s}")
+        if not np.all((self.lag_fraction >= 0) & (self.lag_fraction < 1)):
+            raise ValueError(f"push-off lag fractions must lie in [0, 1), got {self.lag_fraction.tolist()}")
 
     def profile(self, t_s: np.ndarray) -> np.ndarray:
-        """Time course in [0, 1], shape of ``t_s``."""
-        phase = (np.asarray(t_s, float) - self.onset_s) / self.duration_s
-        inside = (phase >= 0) & (phase <= 1)
-        return np.where(inside, np.sin(np.pi * np.clip(phase, 0, 1)) ** 2, 0.0)
+        """Time course in [0, 1] of a joint without lag, shape of ``t_s``."""
+        return _sin2_window(t_s, self.onset_s, self.duration_s)
+
+    def joint_profiles(self, t_s: np.ndarray) -> np.ndarray:
+        """Time course per joint in [0, 1], shape of ``t_s`` + (3,) (:attr:`lag_fraction`)."""
+        lag = self.lag_fraction * self.duration_s
+        t = np.asarray(t_s, float)[..., None]
+        return _sin2_window(t, self.onset_s + lag, self.duration_s - lag)
 
     def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102
         shape = np.broadcast_shapes(np.shape(t_s), np.shape(rho)[:-1])
-        return np.broadcast_to(self.profile(t_s)[..., None] * self.amplitude_nm, shape + (3,))
+        if not self.lag_fraction.any():
+            return np.broadcast_to(self.profile(t_s)[..., None] * self.amplitude_nm, shape + (3,))
+        return np.broadcast_to(self.joint_profiles(t_s) * self.amplitude_nm, shape + (3,))
 
     def with_amplitude(self, amplitude_nm) -> PushOff:
         """Copy with another amplitude (N m, per joint)."""
-        return PushOff(amplitude_nm, self.onset_s, self.duration_s)
+        return PushOff(amplitude_nm, self.onset_s, self.duration_s, self.lag_fraction)
 
     def to_dict(self) -> dict:  # noqa: D102
-        return {"type": "push_off", "amplitude_nm": self.amplitude_nm.tolist(),
-                "onset_s": self.onset_s, "duration_s": self.duration_s}
+        out = {"type": "push_off", "amplitude_nm": self.amplitude_nm.tolist(),
+               "onset_s": self.onset_s, "duration_s": self.duration_s}
+        if self.lag_fraction.any():  # only then: the truth files of the default stay as they were
+            out["lag_fraction"] = self.lag_fraction.tolist()
+        return out
+
+
+def _sin2_window(t_s, onset_s, duration_s) -> np.ndarray:
+    """``sin^2(pi (t - onset) / duration)`` inside ``[onset, onset + duration]``, 0 outside (broadcasting)."""
+    phase = (np.asarray(t_s, float) - onset_s) / duration_s
+    inside = (phase >= 0) & (phase <= 1)
+    return np.where(inside, np.sin(np.pi * np.clip(phase, 0, 1)) ** 2, 0.0)
 
 
 @dataclass(frozen=True)

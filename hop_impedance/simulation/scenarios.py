@@ -257,12 +257,13 @@ def law_scale_at(law_scale: dict | None, freq_hz: float) -> tuple[np.ndarray, np
 def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_duration_s: float,
               hip_trunk_spring_nm_rad: float = 0.0, bell: BellActivation | None = None,
               law_scale: dict | None = None, push_weights=PUSH_OFF_WEIGHTS,
-              biarticular: BiarticularSpring | None = None) -> ImpedanceLaw:
+              biarticular: BiarticularSpring | None = None, push_lags=(0.0, 0.0, 0.0)) -> ImpedanceLaw:
     """The joint law for a frequency with the chosen effects (``hip_trunk_spring_nm_rad`` is added to the
     hip's k0: :data:`HIP_TRUNK_SPRING_NM_RAD`; ``bell`` scales the elastic moment, instead of
     :data:`ACTIVATION`, which it excludes; ``law_scale`` multiplies Table 2's k0 and k1, :func:`law_scale_at`;
     ``push_weights`` shares the push-off between ankle, knee and hip, :data:`PUSH_OFF_WEIGHTS`; ``biarticular``, a
-    passive knee-ankle spring, is a part after the Eq. 3 one, None (default): none)."""
+    passive knee-ankle spring, is a part after the Eq. 3 one, None (default): none; ``push_lags``, the push-off's
+    ``lag_fraction`` per joint, :class:`PushOff`, default none)."""
     if bell is not None and effects.time_activation:
         raise ValueError("one activation per law: the bell excludes Effects.time_activation")
     k0, k1 = seed_stiffness(freq_hz)
@@ -281,7 +282,7 @@ def build_law(freq_hz: float, effects: Effects, push_onset_s: float, push_durati
     passive = (eq3,) if biarticular is None else (eq3, biarticular)
     if not effects.push_off:
         return CompositeLaw(passive)
-    push = PushOff(PUSH_OFF_BASE_NM * np.asarray(push_weights, float), push_onset_s, push_duration_s)
+    push = PushOff(PUSH_OFF_BASE_NM * np.asarray(push_weights, float), push_onset_s, push_duration_s, push_lags)
     return CompositeLaw((*passive, push))
 
 
@@ -319,7 +320,7 @@ def hopping_config(
     hip_trunk_spring_nm_rad: float = 0.0,
     bell_activation_min: float | None = None, law_scale: dict | None = None,
     pad: GroundLaw | None = None, push_weights: tuple[float, float, float] = PUSH_OFF_WEIGHTS,
-    biarticular: BiarticularSpring | None = None,
+    biarticular: BiarticularSpring | None = None, push_lags: tuple[float, float, float] = (0.0, 0.0, 0.0),
     **config_options,
 ) -> tuple[Chain, HoppingConfig]:
     """A hopping configuration from a few high-level choices.
@@ -340,8 +341,8 @@ def hopping_config(
     ``pad`` (e.g. :data:`SHOE_PAD`; None: none): an elastic pad in series with every surface of the trial
     (:class:`~hop_impedance.simulation.ground.PaddedGround`), stated in the truth file's surface. ``push_weights``: the
     push-off's amplitude per joint in units of :data:`PUSH_OFF_BASE_NM` (default :data:`PUSH_OFF_WEIGHTS`).
-    ``biarticular`` (None: none): a passive knee-ankle spring
-    (:class:`~hop_impedance.simulation.impedance_laws.BiarticularSpring`), a part of the law and of its passive stance.
+    ``biarticular`` (None: none): a passive knee-ankle spring (:class:`~.impedance_laws.BiarticularSpring`), a part
+    of the law and of its passive stance. ``push_lags``: the push-off's ``lag_fraction`` (:class:`~.impedance_laws.PushOff`).
     """
     chain = contact_ahead_of_toe_marker(chain_from_body_model(body_model_from_stature(subject)), contact_ahead_m)
     expected = with_pad(surface(calibration_surface or surface_name), pad)
@@ -349,7 +350,7 @@ def hopping_config(
     ts = nominal_stance_s(chain, passive, expected, touchdown_rho_rad, freq_hz)
     bell = None if bell_activation_min is None else BellActivation(bell_activation_min, ts)
     law = build_law(freq_hz, effects, push_timing[0] * ts, push_timing[1] * ts, hip_trunk_spring_nm_rad, bell,
-                    law_scale, push_weights, biarticular)
+                    law_scale, push_weights, biarticular, push_lags)
     config = HoppingConfig(
         freq_hz=freq_hz, n_hops=n_hops, surface=expected, law=law,
         touchdown_rho_rad=joint_triple(touchdown_rho_rad),

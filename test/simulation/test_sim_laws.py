@@ -96,6 +96,23 @@ def test_push_off_pulse_integral_and_composite_sum():
     assert both.n_states == 3
 
 
+def test_push_off_lag_starts_a_joint_later_and_ends_it_with_the_others():
+    # the knee's push lagging by half the window: sin^2 over [0.2, 0.3], so its impulse is A * 0.1 / 2 and it peaks at
+    # 0.25 s; the ankle's stays the unlagged pulse; a lag of 1 or more is refused
+    push = PushOff([100.0, 30.0, 0.0], onset_s=0.1, duration_s=0.2, lag_fraction=(0.0, 0.5, 0.0))
+    t = np.linspace(0, 0.5, 50001)
+    m = push.moments_nm(t, np.zeros((len(t), 3)), np.zeros((len(t), 3)), np.zeros((len(t), 0)), REF)
+    assert np.trapezoid(m[:, 0], t) == pytest.approx(100.0 * 0.2 / 2, rel=1e-6)
+    assert np.trapezoid(m[:, 1], t) == pytest.approx(30.0 * 0.1 / 2, rel=1e-6)
+    assert t[np.argmax(m[:, 1])] == pytest.approx(0.25, abs=1e-5) and m[t < 0.2, 1].max() == 0
+    assert m[t > 0.3].max() == 0
+    assert push.with_amplitude([50.0, 15.0, 0.0]).lag_fraction.tolist() == [0.0, 0.5, 0.0]
+    assert push.to_dict()["lag_fraction"] == [0.0, 0.5, 0.0]
+    assert "lag_fraction" not in PushOff([1.0, 1.0, 1.0], 0.1, 0.2).to_dict()
+    with pytest.raises(ValueError):
+        PushOff([1.0, 1.0, 1.0], 0.1, 0.2, lag_fraction=(0.0, 1.0, 0.0))
+
+
 def test_seed_surface_laws_reproduce_the_published_formulas():
     y, ydot = -0.01, -0.5
     assert SOFT.force_n(y, ydot) == pytest.approx(7.5e4 * 0.01**1.4 + 68.4 * 0.5)
