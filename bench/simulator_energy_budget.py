@@ -47,7 +47,7 @@ import numpy as np
 
 from hop_impedance.simulation.energy_budget import trial_energy_budget
 from hop_impedance.simulation.hopping_trial import push_off_part, simulate_hopping
-from hop_impedance.simulation.impedance_laws import TrunkBalance
+from hop_impedance.simulation.impedance_laws import BiarticularSpring, TrunkBalance
 from hop_impedance.simulation.scenarios import hopping_config
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -237,7 +237,7 @@ ORBIT_PATH = (2.2, 2.1, 2.0, 1.975, 1.95) + tuple(round(1.94 - 0.01 * k, 2) for 
 SETTLE_HOPS = 15
 
 
-def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False) -> dict:
+def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False, extra: dict | None = None) -> dict:
     """The periodic hops of the seed-like hopper's lossless counterpart and their landing feedback, by continuation in
     the law's frequency (scenarios.lossless_hopper_config of scenarios.seed_like_hopper_options()).
 
@@ -250,13 +250,16 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False) -> d
     hop gets its own feedback. ``at_seed_frequency``: instead each periodic hop is the one whose period is 1 / its
     law's frequency (Newton steps on the closed loop with that condition, chosen along the family of periodic hops of
     other energies; found at 2.2 and 2.1 Hz, not at 2.0 Hz). Stops at the first law frequency where none is found.
+    ``extra``: hopping_config options added to the preset's (``--biarticular``: a conservative knee-ankle spring,
+    session 28's probe; printed only).
     Returns {frequency: dict of the hop (scenarios.SEED_LIKE_LOSSLESS_HOPS' entries) and its eigenvalues}.
     """
     from hop_impedance.simulation.hopping_trial import touchdown_state_vector
     from hop_impedance.simulation.periodic_hop import landing_feedback, periodic_hop, touchdown_vector
     from hop_impedance.simulation.scenarios import lossless_hopper_config, seed_like_hopper_options
 
-    chain, config = lossless_hopper_config(path[0], 30, seed_like_hopper_options())
+    options = {**seed_like_hopper_options(), **(extra or {})}
+    chain, config = lossless_hopper_config(path[0], 30, options)
     cal = _calibration(chain, config)
     hop = periodic_hop(chain, config, cal, touchdown_vector(cal.speed_m_s, 0.0, cal.com_ahead_m,
                                                             cal.touchdown_rates_rad_s))
@@ -265,7 +268,7 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False) -> d
     feedback = None
     out = {}
     for freq in path:
-        chain, config = lossless_hopper_config(freq, SETTLE_HOPS, seed_like_hopper_options())
+        chain, config = lossless_hopper_config(freq, SETTLE_HOPS, options)
         landing = hop.state[3:] if feedback is None else feedback.landing_ref
         config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in landing),
                                      landing_feedback=feedback)
@@ -384,11 +387,16 @@ def main() -> None:
                         help="with --find-orbits: the periodic hops of period 1 / the law's frequency (printed only)")
     parser.add_argument("--to", type=float, default=ORBIT_PATH[-1], metavar="HZ",
                         help="with --find-orbits: stop the continuation at this law frequency (one of ORBIT_PATH)")
+    parser.add_argument("--biarticular", metavar="K[,RA,RK]",
+                        help="with --find-orbits: a conservative knee-ankle spring in the lossless counterpart "
+                             "(impedance_laws.BiarticularSpring; printed only, never written)")
     args = parser.parse_args()
     if args.find_orbits:
         path = ORBIT_PATH[:ORBIT_PATH.index(args.to) + 1]
-        found = find_seed_like_orbits(path, at_seed_frequency=args.at_seed_frequency)
-        write_orbits(found, args.write and not args.at_seed_frequency)
+        extra = {"biarticular": BiarticularSpring(*(float(v) for v in args.biarticular.split(",")))} \
+            if args.biarticular else None
+        found = find_seed_like_orbits(path, at_seed_frequency=args.at_seed_frequency, extra=extra)
+        write_orbits(found, args.write and not args.at_seed_frequency and extra is None)
         return
     if args.lossless and args.hopper:
         for freq in (float(f) for f in args.freqs.split(",")):

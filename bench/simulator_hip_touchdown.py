@@ -120,8 +120,21 @@ def part_lines(truth: dict) -> list[str]:
                      f"{e['springs_left_j'] or 0:5.1f}" + ("" if left is None else f", spring left {left:5.1f}") +
                      f", flight {e.get('flight_j', float('nan')):6.1f}; rates at take-off (rad/s) ankle, knee, hip "
                      + ", ".join(f"{w:+.2f}" for w in np.asarray(sm["omega_rad_s"], float)[-1])
-                     + _spring_cells(sm))
+                     + _spring_cells(sm) + _knee_push_cell(st))
     return lines
+
+
+def _knee_push_cell(stance: dict) -> str:
+    """The knee's push-off impulse (N m s) inside the stance against its whole window's (``A (1 - lag) T / 2``): how much
+    of a (lagged, session 28) knee push acts before take-off."""
+    push = stance.get("push_off")
+    if not push or push["amplitude_nm"][1] == 0:
+        return ""
+    sm = stance["samples"]
+    inside = float(np.trapezoid(np.asarray(sm["push_off_moments_nm"], float)[:, 1], np.asarray(sm["t_s"], float)))
+    lag = push.get("lag_fraction", [0.0, 0.0, 0.0])[1]
+    whole = push["amplitude_nm"][1] * (1.0 - lag) * push["duration_s"] / 2.0
+    return f"; knee push in stance {inside:+.2f} of {whole:+.2f} N m s"
 
 
 def landing_from_law(args, options: dict, law_file: str) -> tuple[float, ...]:
