@@ -97,7 +97,8 @@ def passivity_rows(spec: ModelSpec, s: MeasuredStance) -> list[np.ndarray]:
     """Per joint the rows ``R`` (shape (n_rows, n_features)) with ``R @ coefs[j] = (K, B)`` on stance ``s``'s samples.
 
     ``K = dM/drho = sum_k (c_k + c_act_k g(t)) dE_k/drho`` with ``dE_k/drho`` = 1, ``dr``, ``dr^2`` (k0, k1, k2) and
-    ``omega - omega0`` (k3, signed; ``|omega| - |omega0|`` with ``rate_form="speed"``), the incremental stiffness
+    ``omega - omega0`` (k3, signed; ``|omega| - |omega0|`` with ``rate_form="speed"``, ``|omega|`` with
+    ``"abs_speed"``), the incremental stiffness
     of Eq. 3 (the secant activation ``a(t) E`` and the tangent one ``dM = a(t) K drho`` give the same ``K``);
     ``B = dM/domega = b0 + b1 dw`` (rows only with ``joint_damping``). See :data:`EQ7_FIT`.
     """
@@ -108,7 +109,7 @@ def passivity_rows(spec: ModelSpec, s: MeasuredStance) -> list[np.ndarray]:
         dr = s.rho_rad[:, j] - s.rho_rad[0, j]
         w = s.omega_rad_s[:, j]
         dw = w - w[0]
-        k3 = np.abs(w) - np.abs(w[0]) if spec.rate_form == "speed" else dw
+        k3 = {"speed": np.abs(w) - np.abs(w[0]), "abs_speed": np.abs(w)}.get(spec.rate_form, dw)
         # the seed's Eq. 7 rows (impedance.regression_model, used by impedance.constraints): K = k0 + k1 d + k2 d^2
         # + k3 w and B = b0 + b1 w + ..., in PARAMETER_NAMES columns; discovery's terms are a subset of them
         seed_k = stiffness_regressors(dr, k3)

@@ -25,12 +25,16 @@ They differ once the joint extends (omega < 0, second half of stance). The candi
 form only: holding both regressors in the candidate (one more coefficient per joint) made it name a false
 rate-dependent stiffness on the outside angle recording and on a null of the second generator, and the
 outside rate law simulated through our model does not beat the baseline anyway (docs/discovery.md); the speed
-form represents that truth law (``bench/discovery_truth_gap.py``, tests). Likewise the activation's time course has two
-published shapes: seed 001's rise from ``a_min`` (``exp``) and seed 000's bell-shaped stiffness with its
-maximum near mid-stance and non-zero edge values (``bell``), and two readings of how it acts: on the elastic
-moment (``secant``, ``a(t) E``, as our simulator) or on the stiffness in Eq. 3 (``tangent``,
-``dM = a(t) K dphi``, integrated ``int a(t) dE``: the outside generator's form, checked on its stance truth:
-0.4 N m RMS against 32 N m for the secant reading); all four are on the candidate's grid. For
+form represents that truth law hop by hop (``bench/discovery_truth_gap.py``, tests). Pooled over stances it does
+not: the generator simulates ``K = kc + k3 |omega|`` with one ``kc`` (its truth's ``law_simulated``), so its
+touchdown-referenced per-hop ``kc_td = kc + k3 |omega0|`` moves with each hop's ``omega0``, which one pooled ``k0``
+of ``S_speed`` cannot follow; ``rate_form="abs_speed"`` (``K = k0 + k3 |omega|``, regressor
+``S_speed + |omega0| dr = int |omega| omega dt``; session 28, an option) holds it with pooled coefficients.
+Likewise the activation's time course has two published shapes: seed 001's rise from ``a_min`` (``exp``) and
+seed 000's bell-shaped stiffness with its maximum near mid-stance and non-zero edge values (``bell``), and two
+readings of how it acts: on the elastic moment (``secant``, ``a(t) E``, as our simulator) or on the stiffness
+in Eq. 3 (``tangent``, ``dM = a(t) K dphi``, integrated ``int a(t) dE``: the outside generator's form,
+checked on its stance truth: 0.4 N m RMS against 32 N m for the secant reading); all four are on the candidate's grid. For
 fixed ``tau``, ``onset`` and ``duration`` the moment is linear in the
 coefficients (``a(t) E`` is written as ``E - exp(-t/tau) * sum_k c_k E_k``
 with one free ``c_k = (1 - a_min) k_k`` per elastic term), so each fit is
@@ -101,7 +105,8 @@ class ModelSpec:
     activation_form : str
         ``"secant"`` (``a(t)`` scales the elastic moment) or ``"tangent"`` (``dM = a(t) K dphi``).
     rate_form : str
-        ``"signed"`` (``k3 S``, identified) or ``"speed"`` (``k3 S_speed``), see the module docstring.
+        ``"signed"`` (``k3 S``, identified), ``"speed"`` (``k3 S_speed``) or ``"abs_speed"``
+        (``k3 (S_speed + |omega0| dr)``, ``K = k0 + k3 |omega|``), see the module docstring.
     latency_s, offset_n : float
         Sensor model (s, N).
     compliance : tuple (c, p) or None
@@ -198,7 +203,18 @@ def elastic_rates(dr, w, w0) -> list:
     return [w, dr * w, dr**2 * w, (w - w0) * w, (np.abs(w) - np.abs(w0)) * w]
 
 
-def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None) -> np.ndarray:
+def rate_column(spec: ModelSpec, s_int, s_speed, dr, w0, k0_col=None):
+    """The ``k3`` regressor of :attr:`ModelSpec.rate_form`: ``S``, ``S_speed`` or ``S_speed + |omega0| dr``
+    (``abs_speed``: ``int |omega| omega dt``). With ``k0_col`` given, ``s_speed`` and ``k0_col`` are the tangent-form
+    integrals of ``k3_speed`` and ``k0`` and the same sum gives ``abs_speed``'s."""
+    if spec.rate_form == "signed":
+        return s_int
+    if spec.rate_form == "speed":
+        return s_speed
+    return s_speed + np.abs(w0) * (dr if k0_col is None else k0_col)
+
+
+def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None, w0=None) -> np.ndarray:
     """Regressor matrix of one joint, shape (N, len(feature_names(spec))).
 
     Parameters
@@ -208,20 +224,21 @@ def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None) ->
     dr, dw, s_int : ndarray, shape (N,)
         ``rho - rho0`` (rad), ``omega - omega0`` (rad/s), ``S`` (rad^2/s).
     s_speed : ndarray, shape (N,)
-        ``S_speed`` (rad^2/s); needed only with ``rate_form="speed"``.
+        ``S_speed`` (rad^2/s); needed only with ``rate_form`` ``"speed"`` or ``"abs_speed"``.
     tangent : ndarray, shape (N, 5)
         ``int g(t) dE_k`` of :data:`ELASTIC_ALL`; needed only with a tangent-form activation.
+    w0 : float or ndarray
+        ``omega0`` (rad/s); needed only with ``rate_form="abs_speed"``.
     """
     t_s, dr, dw, s_int = np.asarray(t_s, float), np.asarray(dr, float), np.asarray(dw, float), np.asarray(s_int, float)
     # only the columns the spec uses: the simulator builds this matrix at every step (FittedLaw.moments_nm)
     el = [dr if e == "k0" else dr**2 / 2 if e == "k1" else dr**3 / 3 if e == "k2"
-          else s_speed if spec.rate_form == "speed" else s_int for e in elastic_terms(spec)]
+          else rate_column(spec, s_int, s_speed, dr, w0) for e in elastic_terms(spec)]
     out = list(el)
     if spec.has("time_dependent_activation"):
         if spec.activation_form == "tangent":
-            speed = spec.rate_form == "speed"
-            out += [tangent[..., ELASTIC_ALL.index("k3_speed" if e == "k3" and speed else e)]
-                    for e in elastic_terms(spec)]
+            out += [rate_column(spec, tangent[..., 3], tangent[..., 4], dr, w0, tangent[..., 0]) if e == "k3"
+                    else tangent[..., ELASTIC_ALL.index(e)] for e in elastic_terms(spec)]
         else:
             g = activation_modulation(spec, t_s)
             out += [g * e for e in el]
@@ -258,7 +275,8 @@ def stance_features(spec: ModelSpec, t_s, rho, omega) -> list[np.ndarray]:
         g = activation_modulation(spec, t_s)
         tangent = [np.stack([cumulative_trapezoid(g * r, t_s, initial=0.0)
                              for r in elastic_rates(dr[:, j], omega[:, j], omega[0, j])], axis=-1) for j in range(3)]
-    return [features(spec, t_s, dr[:, j], dw[:, j], s_int[:, j], s_speed[:, j], tangent[j]) for j in range(3)]
+    return [features(spec, t_s, dr[:, j], dw[:, j], s_int[:, j], s_speed[:, j], tangent[j], omega[0, j])
+            for j in range(3)]
 
 
 @dataclass(frozen=True)
@@ -303,7 +321,7 @@ class FittedLaw(ImpedanceLaw):
         tangent = None  # read by features() only with a tangent-form activation
         if self.spec.has("time_dependent_activation") and self.spec.activation_form == "tangent":
             tangent = np.swapaxes(s[..., 6:].reshape(s.shape[:-1] + (len(ELASTIC_ALL), 3)), -1, -2)
-        f = features(self.spec, t, dr, dw, s[..., 0:3], s[..., 3:6], tangent)
+        f = features(self.spec, t, dr, dw, s[..., 0:3], s[..., 3:6], tangent, ref.omega0_rad_s)
         return self.touchdown_moment_nm + np.einsum("...jk,jk->...j", f, self.coefficients)
 
     def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102

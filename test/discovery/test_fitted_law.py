@@ -16,7 +16,7 @@ from hop_impedance.simulation.impedance_laws import TouchdownReference
 SPECS = [ModelSpec(effects=combo, activation_form=form, activation_shape=shape, rate_form=rate, tau_s=0.05,
                    onset_s=0.08, duration_s=0.12)
          for n in range(len(JOINT_EFFECTS) + 1) for combo in itertools.combinations(JOINT_EFFECTS, n)
-         for form, shape, rate in (("secant", "exp", "signed"), ("tangent", "bell", "speed"))]
+         for form, shape, rate in (("secant", "exp", "signed"), ("tangent", "bell", "speed"), ("tangent", "bell", "abs_speed"))]
 
 
 @pytest.mark.parametrize("spec", SPECS, ids=lambda s: "+".join(s.effects) or "baseline")
