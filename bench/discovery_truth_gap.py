@@ -14,10 +14,12 @@ model cannot show that effect by forward simulation, whatever the selection does
 
 The true law's ``M_td`` per stance: ``--touchdown-moment`` (:data:`TOUCHDOWN_MOMENTS`; default ``estimated``, as a
 candidate's; sessions 2-14 used the truth's at the contact). ``--two-sided``: the gap with
-``forward_selection.TWO_SIDED_DURATION``.
+``forward_selection.TWO_SIDED_DURATION``. ``--ground-damping D``: the strict ground with a damper of D N s/m (session
+28: undamped, our simulated foot rings on it at 100-125 Hz, +-150 N, for the whole stance, excited at touchdown (every
+toe velocity from 0 to -0.2 m/s tried on 1301); 300 N s/m damps that mode, the truth says 0).
 
 Usage: .venv/bin/python bench/discovery_truth_gap.py [DIR] [CASE ...] [--discover] [--touchdown-moment estimated]
-[--two-sided]
+[--two-sided] [--ground-damping D]
 """
 
 from __future__ import annotations
@@ -106,7 +108,7 @@ def fitted_law(how: str, spec, coefs, m_td, s) -> FittedLaw:
     return FittedLaw(spec, coefs, m_td, identification_reference(s) if how == "estimated" else None)
 
 
-def outside_truth(path: Path, touchdown_moment: str) -> tuple:
+def outside_truth(path: Path, touchdown_moment: str, ground_damping: float = 0.0) -> tuple:
     """An outside recording measured as discovery measures it (the truth's marker latency removed) with, per stance,
     its hop of the truth, the truth's law as a candidate would be simulated (``touchdown_moment``) and its ground.
     Returns (recording, truth, trial, hops, laws, grounds)."""
@@ -123,7 +125,8 @@ def outside_truth(path: Path, touchdown_moment: str) -> tuple:
         m_td = true_touchdown_moment(touchdown_moment, truth, hop, s, rec.start_ns, spec, coefs)
         hops.append(hop)
         laws.append(fitted_law(touchdown_moment, spec, coefs, m_td, s))
-        grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else STRICT_GROUND)
+        strict = replace(STRICT_GROUND, damping_n_s_m=ground_damping) if ground_damping else STRICT_GROUND
+        grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else strict)
     return rec, truth, trial, hops, laws, grounds
 
 
@@ -134,12 +137,14 @@ def main() -> None:
     ap.add_argument("--discover", action="store_true", help="also run discover and print final gap / truth gap")
     ap.add_argument("--touchdown-moment", choices=TOUCHDOWN_MOMENTS, default=TOUCHDOWN_MOMENTS[0])
     ap.add_argument("--two-sided", action="store_true", help="the gap with forward_selection.TWO_SIDED_DURATION")
+    ap.add_argument("--ground-damping", type=float, default=0.0, help="damper of the strict ground (N s/m; truth: 0)")
     args = ap.parse_args()
     fs.TWO_SIDED_DURATION = args.two_sided
     folder = Path(args.folder)
     cases = args.cases or sorted(p.name[:-5] for p in folder.glob("*.mcap"))
     for case in cases:
-        rec, truth, trial, hops, laws, grounds = outside_truth(folder / f"{case}.mcap", args.touchdown_moment)
+        rec, truth, trial, hops, laws, grounds = outside_truth(folder / f"{case}.mcap", args.touchdown_moment,
+                                                                 args.ground_damping)
         offset = 0.0
         if "force_plate_offset" in truth["effects"]:  # "constant +25.5 N added to force.z"
             offset = float(truth["effect_details"]["force_plate_offset"].split()[1])
