@@ -53,7 +53,9 @@ stance simulated from the measured state D s after its touchdown, compared from 
 start sample, the late run from it), ``--two-segment-flight``: ``forward_selection.TWO_SEGMENT_FLIGHT`` with that
 (a run from the touchdown that takes off before the start sample compared as in flight up to it); ``--work-scale X``:
 ``forward_selection.WORK_SCALE`` (the net-joint-work term's scale, session 26; its ``--gate-order`` and
-``--push-off-signed``, measured and removed, run at commit 9b1492a); set in this
+``--push-off-signed``, measured and removed, run at commit 9b1492a); ``--two-sided-duration``:
+``forward_selection.TWO_SIDED_DURATION`` (session 14's option, re-measured in session 28: the duration term also
+charges a stance simulated past the measured take-off); set in this
 process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
@@ -188,6 +190,9 @@ def main() -> None:
     ap.add_argument("--work-scale", type=float, default=None, metavar="X",
                     help="forward_selection.WORK_SCALE = X: the net-joint-work term's scale, a share of the work the "
                          "joints absorb per measured stance (default 1; session 26)")
+    ap.add_argument("--two-sided-duration", action="store_true",
+                    help="forward_selection.TWO_SIDED_DURATION = True (session 14's option): the duration term is the "
+                         "simulated take-off minus the measured one, also for a stance simulated too long")
     ap.add_argument("--gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = True (session 17's option): the gate also passes a candidate "
                          "significantly better on one sampled signal (Bonferroni over the 7) and worse on none; "
@@ -241,6 +246,7 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--energy-pairs", forward_selection, "ENERGY_PAIRS", True if args.energy_pairs else None),
             ("--accept-step", forward_selection, "VELOCITY_FIT_ACCEPT", True if args.accept_step else None),
             ("--work-scale", forward_selection, "WORK_SCALE", args.work_scale),
+            ("--two-sided-duration", forward_selection, "TWO_SIDED_DURATION", True if args.two_sided_duration else None),
             ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
             ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None)):
         if value is None:

@@ -89,6 +89,10 @@ WORK_ALPHA = 0.05
 #: mostly the bench's: with ``M_td`` estimated as for a candidate the true law ends -0.2..+1.9 ms from the measured
 #: take-off on the outside rigid nulls, -2.45 ms on our simulator's null, and early on the second generator's, -2..-13
 #: ms with the table body: ``bench/discovery_stance_edges.py``, docs/discovery.md "Session 15".)
+#: Session 28 re-measured it on that day's default (docs/discovery.md "Session 28"): outside files 2/8 exact against the
+#: default's 5/8 (1201, 1401, 1501 lost; 1401's activation again), strict null 17's surface again, and our simulator's
+#: angle + offset names an activation instead of the angle law: the gate's fold-0 angle law, regressed on 4 stances,
+#: collapses past the measured take-off and the whole-stance work term charges it ~300 J a stance.
 TWO_SIDED_DURATION = False
 #: Session 15 (:mod:`hop_impedance.discovery.surface_shot`; the default since session 15, docs/discovery.md "Session
 #: 15"): in a round whose current model has the surface, every model is judged on this many held-out folds, each fold's
