@@ -68,6 +68,10 @@ def doc_points(docs: list[dict], final: bool, fold: int, reg: np.ndarray) -> dic
         pts[f"doc{k} baseline shot"] = np.array(g["current"]["k0_shot_nm_per_rad"][fold]) / reg
         for eff, c in g["candidates"].items():
             pts[f"doc{k} {eff} shot"] = np.array(c["k0_shot_nm_per_rad"][fold]) / reg
+    bad = [name for name, fac in pts.items() if not np.all(fac > 0)]
+    for name in bad:  # a shot k0 of the other sign than the regression's (e.g. 1201's fold 1, a negative regression k0)
+        print(f"  {name}: skipped, k0 factors {pts.pop(name)} on the regression k0 {reg} are not all > 0 "
+              f"(the search moves log factors)")
     return pts
 
 
