@@ -118,6 +118,7 @@ def outside_truth(path: Path, touchdown_moment: str, ground_damping: float = 0.0
     if "stream_latency" in truth["effects"]:  # "marker content lags its stamps by 20.5 ms"
         latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
     trial = measure_trial(rec, marker_latency_s=latency)
+    strict = replace(STRICT_GROUND, damping_n_s_m=ground_damping) if ground_damping else STRICT_GROUND
     hops, laws, grounds = [], [], []
     for s in trial.stances:
         hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
@@ -125,7 +126,6 @@ def outside_truth(path: Path, touchdown_moment: str, ground_damping: float = 0.0
         m_td = true_touchdown_moment(touchdown_moment, truth, hop, s, rec.start_ns, spec, coefs)
         hops.append(hop)
         laws.append(fitted_law(touchdown_moment, spec, coefs, m_td, s))
-        strict = replace(STRICT_GROUND, damping_n_s_m=ground_damping) if ground_damping else STRICT_GROUND
         grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else strict)
     return rec, truth, trial, hops, laws, grounds
 
