@@ -237,8 +237,9 @@ def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None, w0
     out = list(el)
     if spec.has("time_dependent_activation"):
         if spec.activation_form == "tangent":
-            out += [rate_column(spec, tangent[..., 3], tangent[..., 4], dr, w0, tangent[..., 0]) if e == "k3"
-                    else tangent[..., ELASTIC_ALL.index(e)] for e in elastic_terms(spec)]
+            col = {e: tangent[..., i] for i, e in enumerate(ELASTIC_ALL)}
+            out += [rate_column(spec, col["k3"], col["k3_speed"], dr, w0, col["k0"]) if e == "k3" else col[e]
+                    for e in elastic_terms(spec)]
         else:
             g = activation_modulation(spec, t_s)
             out += [g * e for e in el]
