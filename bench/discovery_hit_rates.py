@@ -55,7 +55,8 @@ start sample, the late run from it), ``--two-segment-flight``: ``forward_selecti
 ``forward_selection.WORK_SCALE`` (the net-joint-work term's scale, session 26; its ``--gate-order`` and
 ``--push-off-signed``, measured and removed, run at commit 9b1492a); ``--two-sided-duration``:
 ``forward_selection.TWO_SIDED_DURATION`` (session 14's option, re-measured in session 28: the duration term also
-charges a stance simulated past the measured take-off); set in this
+charges a stance simulated past the measured take-off); ``--angle-hold``: ``forward_selection.ANGLE_HOLD`` (session
+29's option: the angle terms' stiffness held past the stance's measured angles); set in this
 process, so only without ``--scheduler``. Run with
 ``PYTHONPATH=<this checkout>`` from a worktree: a script's ``sys.path[0]`` is ``bench/``, so otherwise the installed
 package is imported and options set on it are not the checkout's (session 16 measured the default that way).
@@ -193,6 +194,9 @@ def main() -> None:
     ap.add_argument("--two-sided-duration", action="store_true",
                     help="forward_selection.TWO_SIDED_DURATION = True (session 14's option): the duration term is the "
                          "simulated take-off minus the measured one, also for a stance simulated too long")
+    ap.add_argument("--angle-hold", action="store_true",
+                    help="forward_selection.ANGLE_HOLD = True (session 29's option): a held-out stance's angle terms "
+                         "hold their stiffness past the joint angles measured in it")
     ap.add_argument("--gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = True (session 17's option): the gate also passes a candidate "
                          "significantly better on one sampled signal (Bonferroni over the 7) and worse on none; "
@@ -247,6 +251,7 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--accept-step", forward_selection, "VELOCITY_FIT_ACCEPT", True if args.accept_step else None),
             ("--work-scale", forward_selection, "WORK_SCALE", args.work_scale),
             ("--two-sided-duration", forward_selection, "TWO_SIDED_DURATION", True if args.two_sided_duration else None),
+            ("--angle-hold", forward_selection, "ANGLE_HOLD", True if args.angle_hold else None),
             ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
             ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None)):
         if value is None:

@@ -94,6 +94,12 @@ WORK_ALPHA = 0.05
 #: angle + offset names an activation instead of the angle law: the gate's fold-0 angle law, regressed on 4 stances,
 #: collapses past the measured take-off and the whole-stance work term charges it ~300 J a stance.
 TWO_SIDED_DURATION = False
+#: Session 29 (an option, off): a held-out stance's law holds its angle terms' stiffness (``k1 dr + k2 dr^2``) at the
+#: edge of the joint angles measured in that stance (``FittedLaw.angle_range``): the polynomial is not extrapolated
+#: past the measured flexion and extension. Why: session 28 found fold 0's angle law (4 stances) collapse past the
+#: measured take-off under :data:`TWO_SIDED_DURATION` (knee moment 1777 N m, 351 J a stance) and the gate refuse the
+#: true effect; inside the measured range the law is unchanged.
+ANGLE_HOLD = False
 #: Session 15 (:mod:`hop_impedance.discovery.surface_shot`; the default since session 15, docs/discovery.md "Session
 #: 15"): in a round whose current model has the surface, every model is judged on this many held-out folds, each fold's
 #: model with its own surface law chosen through the simulation on the fold's training stances. 0: leave-one-out
@@ -312,7 +318,8 @@ def simulate_held_out(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, 
     ``samples``: also its scaled residuals (:func:`_gap_of`), for a least-squares search over parameters.
     """
     coefs = per_stance_push_off(spec, coefs, s)
-    law = FittedLaw(spec, np.asarray(coefs, float), touchdown_moments(spec, coefs, s), identification_reference(s))
+    law = FittedLaw(spec, np.asarray(coefs, float), touchdown_moments(spec, coefs, s), identification_reference(s),
+                    measured_angle_range(s) if ANGLE_HOLD else None)
     try:
         sim = simulate_for_gap(trial.chain, law, ground_of(spec, s), s, spec.offset_n)
     except RuntimeError as exc:
@@ -320,6 +327,13 @@ def simulate_held_out(spec: ModelSpec, coefs: np.ndarray, trial: MeasuredTrial, 
     # the detector's level is read only by the two-sided term: not worked out for every simulated stance otherwise
     level = take_off_level_n(trial) if TWO_SIDED_DURATION else np.nan
     return _gap_of(sim, s, spec.offset_n, scales, level, samples)
+
+
+def measured_angle_range(s: MeasuredStance) -> np.ndarray:
+    """Per joint the range (low, high) of ``rho - rho0`` measured in stance ``s`` (rad, shape (3, 2)), against its
+    identification reference (:data:`ANGLE_HOLD`)."""
+    dr = s.rho_rad - s.rho_rad[0]
+    return np.stack([dr.min(axis=0), dr.max(axis=0)], axis=-1)
 
 
 def lost_stance(reason: str) -> dict:

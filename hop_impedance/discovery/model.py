@@ -214,7 +214,16 @@ def rate_column(spec: ModelSpec, s_int, s_speed, dr, w0, k0_col=None):
     return s_speed + np.abs(w0) * (dr if k0_col is None else k0_col)
 
 
-def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None, w0=None) -> np.ndarray:
+def angle_column(term: str, dr, held=None):
+    """The ``k1`` / ``k2`` regressor ``dr^2/2`` / ``dr^3/3``; with ``held`` (``dr`` clipped to a range,
+    :attr:`FittedLaw.angle_range`) its continuation past the range at the edge's stiffness, ``c^2/2 + c (dr - c)`` /
+    ``c^3/3 + c^2 (dr - c)`` with ``c = held``: the same inside the range, the moment's slope there held outside."""
+    if held is None:
+        return dr**2 / 2 if term == "k1" else dr**3 / 3
+    return held**2 / 2 + held * (dr - held) if term == "k1" else held**3 / 3 + held**2 * (dr - held)
+
+
+def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None, w0=None, held=None) -> np.ndarray:
     """Regressor matrix of one joint, shape (N, len(feature_names(spec))).
 
     Parameters
@@ -229,10 +238,12 @@ def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None, w0
         ``int g(t) dE_k`` of :data:`ELASTIC_ALL`; needed only with a tangent-form activation.
     w0 : float or ndarray
         ``omega0`` (rad/s); needed only with ``rate_form="abs_speed"``.
+    held : ndarray, shape (N,), optional
+        ``dr`` clipped to a range for the angle terms (:func:`angle_column`); None: the polynomial everywhere.
     """
     t_s, dr, dw, s_int = np.asarray(t_s, float), np.asarray(dr, float), np.asarray(dw, float), np.asarray(s_int, float)
     # only the columns the spec uses: the simulator builds this matrix at every step (FittedLaw.moments_nm)
-    el = [dr if e == "k0" else dr**2 / 2 if e == "k1" else dr**3 / 3 if e == "k2"
+    el = [dr if e == "k0" else angle_column(e, dr, held) if e in ("k1", "k2")
           else rate_column(spec, s_int, s_speed, dr, w0) for e in elastic_terms(spec)]
     out = list(el)
     if spec.has("time_dependent_activation"):
@@ -297,12 +308,21 @@ class FittedLaw(ImpedanceLaw):
         starts from. Session 15: the law keeps the identification's reference when the simulation starts from
         another touchdown state (``measurement.TOUCHDOWN_STATE``); with the filtered kinematics' state both are the
         same numbers.
+    angle_range : ndarray, shape (3, 2), or None
+        Per joint the ``rho - rho0`` range (rad, low, high) past which the angle terms' stiffness ``k1 dr + k2 dr^2``
+        is held at the edge's value (:func:`angle_column`; ``forward_selection.ANGLE_HOLD``, session 29); None: the
+        polynomial everywhere.
     """
 
     spec: ModelSpec
     coefficients: np.ndarray = field(default_factory=lambda: np.zeros((3, 1)))
     touchdown_moment_nm: np.ndarray = field(default_factory=lambda: np.zeros(3))
     reference: TouchdownReference | None = None
+    angle_range: np.ndarray | None = None
+
+    def held(self, dr):
+        """``dr`` clipped to :attr:`angle_range` (None without one)."""
+        return None if self.angle_range is None else np.clip(dr, self.angle_range[:, 0], self.angle_range[:, 1])
 
     #: ``S`` and ``S_speed`` per joint, then ``int g(t) dE_k`` per term of :data:`ELASTIC_ALL` and joint
     #: (state ``6 + 3 m + j``; integrated always, used with a tangent-form activation).
@@ -322,7 +342,7 @@ class FittedLaw(ImpedanceLaw):
         tangent = None  # read by features() only with a tangent-form activation
         if self.spec.has("time_dependent_activation") and self.spec.activation_form == "tangent":
             tangent = np.swapaxes(s[..., 6:].reshape(s.shape[:-1] + (len(ELASTIC_ALL), 3)), -1, -2)
-        f = features(self.spec, t, dr, dw, s[..., 0:3], s[..., 3:6], tangent, ref.omega0_rad_s)
+        f = features(self.spec, t, dr, dw, s[..., 0:3], s[..., 3:6], tangent, ref.omega0_rad_s, self.held(dr))
         return self.touchdown_moment_nm + np.einsum("...jk,jk->...j", f, self.coefficients)
 
     def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102
@@ -335,7 +355,8 @@ class FittedLaw(ImpedanceLaw):
         g = np.asarray(activation_modulation(self.spec, t_s), float)
         g = g[..., None] if g.ndim else g
         dr = np.asarray(rho, float) - ref.rho0_rad
-        return np.concatenate(rates + [g * r for r in elastic_rates(dr, w, w0)], axis=-1)
+        held = self.held(dr)  # d/dt of angle_column's continuation: held dr in place of dr
+        return np.concatenate(rates + [g * r for r in elastic_rates(dr if held is None else held, w, w0)], axis=-1)
 
     def to_dict(self) -> dict:  # noqa: D102
         names = feature_names(self.spec)

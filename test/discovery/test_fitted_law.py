@@ -10,7 +10,15 @@ import itertools
 import numpy as np
 import pytest
 
-from hop_impedance.discovery.model import JOINT_EFFECTS, FittedLaw, ModelSpec, feature_names
+from hop_impedance.discovery.model import (
+    ELASTIC_ALL,
+    JOINT_EFFECTS,
+    FittedLaw,
+    ModelSpec,
+    activation_modulation,
+    angle_column,
+    feature_names,
+)
 from hop_impedance.simulation.impedance_laws import TouchdownReference
 
 SPECS = [ModelSpec(effects=combo, activation_form=form, activation_shape=shape, rate_form=rate, tau_s=0.05,
@@ -34,3 +42,40 @@ def test_one_instant_equals_the_broadcast_path(spec):
         rates = law.state_rates(np.float64(t), rho, omega, states, ref)
         assert rates.shape == (FittedLaw.n_states,)
         np.testing.assert_array_equal(rates, law.state_rates(np.array([t]), rho[None], omega[None], states[None], ref)[0])
+
+
+def test_angle_hold_keeps_the_law_in_the_range_and_the_edge_stiffness_past_it():
+    """``FittedLaw.angle_range`` (session 29's ANGLE_HOLD): inside the range the moments are the polynomial law's to the
+    last bit; past an edge the moment goes on at the stiffness ``k0 + k1 c + k2 c^2`` of that edge (worked out here from
+    the coefficients, not from the regressors); the tangent-form state rates are the held columns' time derivatives."""
+    spec = ModelSpec(effects=("angle_dependent_stiffness",))
+    names = feature_names(spec)
+    rng = np.random.default_rng(29)
+    coefs = rng.normal(0, 300, (3, len(names)))
+    ref = TouchdownReference(np.array([0.4, 0.5, 0.6]), np.zeros(3))
+    span = np.array([[-0.05, 0.30], [-0.02, 0.50], [-0.10, 0.25]])
+    free, held = FittedLaw(spec, coefs, np.zeros(3), ref), FittedLaw(spec, coefs, np.zeros(3), ref, span)
+    zero = np.zeros(FittedLaw.n_states)
+    for dr in (span[:, 0] + 1e-3, span[:, 1] - 1e-3, 0.5 * span.sum(axis=1)):
+        np.testing.assert_array_equal(held.moments_nm(0.1, ref.rho0_rad + dr, zero[:3], zero, ref),
+                                      free.moments_nm(0.1, ref.rho0_rad + dr, zero[:3], zero, ref))
+    for edge, beyond in ((span[:, 1], 0.2), (span[:, 0], -0.15)):
+        k_edge = sum(coefs[:, names.index(k)] * edge**p for p, k in enumerate(("k0", "k1", "k2")) if k in names)
+        m_edge = free.moments_nm(0.1, ref.rho0_rad + edge, zero[:3], zero, ref)
+        m_past = held.moments_nm(0.1, ref.rho0_rad + edge + beyond, zero[:3], zero, ref)
+        np.testing.assert_allclose(m_past, m_edge + k_edge * beyond, rtol=1e-12, atol=1e-9)
+        assert np.all(np.abs(m_past - free.moments_nm(0.1, ref.rho0_rad + edge + beyond, zero[:3], zero, ref)) > 1e-3)
+    tangent = ModelSpec(effects=("angle_dependent_stiffness", "time_dependent_activation"), activation_form="tangent",
+                        activation_shape="bell", tau_s=0.2)
+    law = FittedLaw(tangent, rng.normal(0, 300, (3, len(feature_names(tangent)))), np.zeros(3), ref, span)
+    t = np.linspace(0, 0.3, 3001)
+    rho = ref.rho0_rad + np.outer(np.sin(20 * t), [0.6, 0.7, 0.5])
+    omega = np.gradient(rho, t, axis=0)
+    rates = law.state_rates(t, rho, omega, np.zeros((t.size, FittedLaw.n_states)), ref)
+    dr = rho - ref.rho0_rad
+    column = angle_column("k1", dr, np.clip(dr, span[:, 0], span[:, 1]))
+    g = activation_modulation(tangent, t)[:, None]
+    k1_state = rates[:, 6 + 3 * ELASTIC_ALL.index("k1"): 9 + 3 * ELASTIC_ALL.index("k1")]
+    np.testing.assert_allclose(k1_state[1:-1], (g * np.gradient(column, t, axis=0))[1:-1], rtol=0, atol=1e-2)
+    one = law.moments_nm(np.float64(0.2), rho[2000], omega[2000], zero, ref)
+    np.testing.assert_array_equal(one, law.moments_nm(np.array([0.2]), rho[2000][None], omega[2000][None], zero[None], ref)[0])
