@@ -1,0 +1,78 @@
+"""Our inverse-dynamics moments against the outside generator's true moments, per joint and stance phase.
+
+For every ``../shared/foreign/*.mcap`` (or the cases given) the recording is measured as discovery measures it
+(:func:`hop_impedance.discovery.measurement.measure_trial`, the truth's marker latency removed) and each stance's ID
+moments (extensor positive, both legs) are compared with the truth's ``stance_truth`` moments interpolated at the plate
+samples (the truth's hop nearest the detected touchdown). Printed per file, medians over stances, per joint: the RMS
+error in % of the truth's RMS moment, the mean error (N m) and the RMS error (N m) in the stance's first 10 %, middle
+80 % and last 10 % (by sample), and the truth's RMS moment. The edges are where the 12 Hz low-pass of plate and markers
+runs across the impact and the take-off; the middle is what marker noise and the body table leave.
+
+    .venv/bin/python bench/foreign_id_error.py [--folder DIR] [CASE ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from hop_impedance.discovery.measurement import measure_trial, shift_marker_stream
+from hop_impedance.io.recording_io import load_recording
+
+REPO = Path(__file__).resolve().parents[1]
+JOINTS = ("ankle", "knee", "hip")
+
+
+def stance_errors(s, rows: np.ndarray, cols: list, t_offset_s: float) -> np.ndarray:
+    """Per joint: RMS error (% of truth RMS), mean error, RMS error first 10 % / middle / last 10 % (N m), truth RMS."""
+    t = t_offset_s + s.touchdown_s + s.t_s
+    tt = rows[:, cols.index("t_s")]
+    inside = (t >= tt[0]) & (t <= tt[-1])
+    out = []
+    for k, joint in enumerate(JOINTS):
+        truth = np.interp(t[inside], tt, rows[:, cols.index(f"M_{joint}")])
+        err = s.moment_nm[inside, k] - truth
+        a, b = int(0.1 * err.size), int(0.9 * err.size)
+        rms = float(np.sqrt(np.mean(truth**2)))
+        out.append([np.sqrt(np.mean(err**2)) / rms * 100, err.mean(), *(np.sqrt(np.mean(e**2)) for e in
+                                                                          (err[:a], err[a:b], err[b:])), rms])
+    return np.array(out)
+
+
+def file_errors(path: Path) -> np.ndarray:
+    """:func:`stance_errors` of every stance of one outside recording, shape (stances, 3, 6)."""
+    rec = load_recording(path)
+    truth = json.loads(path.with_suffix(".truth.json").read_text())
+    latency = 0.0
+    if "stream_latency" in truth["effects"]:  # "marker content lags its stamps by 20.5 ms"
+        latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
+    trial = measure_trial(rec, marker_latency_s=latency)
+    rows = np.asarray(truth["stance_truth"]["rows"], float)
+    cols = truth["stance_truth"]["columns"]
+    epoch = truth["recording"]["epoch_start_ns"]
+    offset = (shift_marker_stream(rec, latency).start_ns - epoch) * 1e-9  # the trial's clock: its markers shifted
+    out = []
+    for s in trial.stances:
+        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - epoch) * 1e-9 - offset - s.touchdown_s))
+        out.append(stance_errors(s, rows[rows[:, cols.index("hop")] == hop["hop"]], cols, offset))
+    return np.array(out)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("cases", nargs="*")
+    ap.add_argument("--folder", default=str(REPO.parent / "shared" / "foreign"))
+    args = ap.parse_args()
+    folder = Path(args.folder)
+    for case in args.cases or sorted(p.name[:-5] for p in folder.glob("*.mcap")):
+        med = np.median(file_errors(folder / f"{case}.mcap"), axis=0)
+        print(f"{case}: " + " | ".join(
+            f"{j} {m[0]:.1f} % mean {m[1]:+.1f} edges/middle {m[2]:.1f}/{m[3]:.1f}/{m[4]:.1f} N m (RMS {m[5]:.0f})"
+            for j, m in zip(JOINTS, med)), flush=True)
+
+
+if __name__ == "__main__":
+    main()
