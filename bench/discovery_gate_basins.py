@@ -18,7 +18,8 @@ Usage (session 27)::
 
 ``angle+offset`` is test/discovery/test_hidden_effects.py's case (generated as the test does). ``--doc`` files are
 ``discover`` documents (``--json``); their round-0 gate (``--final``: ``final_gap_through_simulation``) gives the
-points. ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` is not needed (no rclpy).
+points. ``--angle-hold`` (session 29): every point simulated with ``forward_selection.ANGLE_HOLD``.
+``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` is not needed (no rclpy).
 """
 
 from __future__ import annotations
@@ -131,9 +132,12 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--factors", action="append", default=[], metavar="A,K,H",
                     help="also k0 factors (ankle, knee, hip) on each fold's regression k0 (repeatable)")
     ap.add_argument("--two-sided", action="store_true", help="also the two-sided take-off error")
+    ap.add_argument("--angle-hold", action="store_true",
+                    help="forward_selection.ANGLE_HOLD (session 29): the angle terms held past each stance's angles")
     ap.add_argument("--lm", type=float, action="append", default=[], metavar="X",
                     help="LM search with the work term at X from the regression and each document's baseline shot")
     args = ap.parse_args(argv)
+    fs.ANGLE_HOLD = args.angle_hold
     np.set_printoptions(precision=4, suppress=True, linewidth=220)
     rec = recording(args.recording)
     trial = measure_trial(rec)
