@@ -154,6 +154,9 @@ class ModelSpec:
 #: fit on the stances' cores with ``k2`` extrapolates K at touchdown badly (seed 1: ankle 269 - 235 d + 264 d^2 against
 #: the truth's 86 + 215 d; k0 + k1 alone: 160 + 109 d), and at the hip, whose 0.07-0.2 rad of flexion leave the
 #: ID moment's body errors (8-24 N m RMS) to dominate, k1/k2 come out at +-1e4..2e5 and the simulation blows up.
+#: Session 29 on that day's default (docs/discovery.md, "Session 29 (lead)"): outside 5/8 exact and 0/6 false (the
+#: default's names), our simulator's sweep 3/10 (as the default), second generator nulls 0/60 and angle 3/9 (default
+#: 2/9); our simulator's 60 nulls with it alone are not measured yet.
 ANGLE_TERMS: tuple[str, ...] = ("k1", "k2")
 
 
