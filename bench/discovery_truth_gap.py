@@ -35,7 +35,7 @@ from hop_impedance.discovery import forward_selection as fs
 from hop_impedance.discovery.forward import ground_of
 from hop_impedance.discovery.forward_selection import identification_reference, law_gaps
 from hop_impedance.discovery.identify import identify, touchdown_moments
-from hop_impedance.discovery.measurement import measure_trial
+from hop_impedance.discovery.measurement import measure_trial, shift_marker_stream
 from hop_impedance.discovery.model import FittedLaw, ModelSpec
 from hop_impedance.discovery.workflow import discover
 from hop_impedance.io.recording_io import load_recording
@@ -108,22 +108,29 @@ def fitted_law(how: str, spec, coefs, m_td, s) -> FittedLaw:
     return FittedLaw(spec, coefs, m_td, identification_reference(s) if how == "estimated" else None)
 
 
-def outside_truth(path: Path, touchdown_moment: str, ground_damping: float = 0.0) -> tuple:
-    """An outside recording measured as discovery measures it (the truth's marker latency removed) with, per stance,
-    its hop of the truth, the truth's law as a candidate would be simulated (``touchdown_moment``) and its ground.
-    Returns (recording, truth, trial, hops, laws, grounds)."""
+def measured_outside(path: Path) -> tuple:
+    """An outside recording measured as discovery measures it, the truth's marker latency removed. Returns (recording,
+    truth, trial, clock_ns): ``clock_ns`` is the zero of the trial's times, the first stamp once the markers are
+    shifted (earlier than the recording's own ``start_ns`` when they lag)."""
     rec = load_recording(path)
     truth = json.loads(path.with_suffix(".truth.json").read_text())
     latency = 0.0
     if "stream_latency" in truth["effects"]:  # "marker content lags its stamps by 20.5 ms"
         latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
-    trial = measure_trial(rec, marker_latency_s=latency)
+    return rec, truth, measure_trial(rec, marker_latency_s=latency), shift_marker_stream(rec, latency).start_ns
+
+
+def outside_truth(path: Path, touchdown_moment: str, ground_damping: float = 0.0) -> tuple:
+    """An outside recording measured as discovery measures it (:func:`measured_outside`) with, per stance,
+    its hop of the truth, the truth's law as a candidate would be simulated (``touchdown_moment``) and its ground.
+    Returns (recording, truth, trial, hops, laws, grounds)."""
+    rec, truth, trial, clock_ns = measured_outside(path)
     strict = replace(STRICT_GROUND, damping_n_s_m=ground_damping) if ground_damping else STRICT_GROUND
     hops, laws, grounds = [], [], []
     for s in trial.stances:
-        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
+        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - clock_ns) * 1e-9 - s.touchdown_s))
         spec, coefs = truth_law(hop)
-        m_td = true_touchdown_moment(touchdown_moment, truth, hop, s, rec.start_ns, spec, coefs)
+        m_td = true_touchdown_moment(touchdown_moment, truth, hop, s, clock_ns, spec, coefs)
         hops.append(hop)
         laws.append(fitted_law(touchdown_moment, spec, coefs, m_td, s))
         grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else strict)

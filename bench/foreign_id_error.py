@@ -14,13 +14,10 @@ runs across the impact and the take-off; the middle is what marker noise and the
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 import numpy as np
-
-from hop_impedance.discovery.measurement import measure_trial, shift_marker_stream
-from hop_impedance.io.recording_io import load_recording
+from discovery_truth_gap import measured_outside  # bench/ is sys.path[0]
 
 REPO = Path(__file__).resolve().parents[1]
 JOINTS = ("ankle", "knee", "hip")
@@ -44,16 +41,11 @@ def stance_errors(s, rows: np.ndarray, cols: list, t_offset_s: float) -> np.ndar
 
 def file_errors(path: Path) -> np.ndarray:
     """:func:`stance_errors` of every stance of one outside recording, shape (stances, 3, 6)."""
-    rec = load_recording(path)
-    truth = json.loads(path.with_suffix(".truth.json").read_text())
-    latency = 0.0
-    if "stream_latency" in truth["effects"]:  # "marker content lags its stamps by 20.5 ms"
-        latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
-    trial = measure_trial(rec, marker_latency_s=latency)
+    _, truth, trial, clock_ns = measured_outside(path)
     rows = np.asarray(truth["stance_truth"]["rows"], float)
     cols = truth["stance_truth"]["columns"]
     epoch = truth["recording"]["epoch_start_ns"]
-    offset = (shift_marker_stream(rec, latency).start_ns - epoch) * 1e-9  # the trial's clock: its markers shifted
+    offset = (clock_ns - epoch) * 1e-9
     out = []
     for s in trial.stances:
         hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - epoch) * 1e-9 - offset - s.touchdown_s))
