@@ -120,6 +120,11 @@ def measured_outside(path: Path) -> tuple:
     return rec, truth, measure_trial(rec, marker_latency_s=latency), shift_marker_stream(rec, latency).start_ns
 
 
+def truth_hop(truth: dict, clock_ns: int, s) -> dict:
+    """The truth's hop (``per_hop`` entry) whose touchdown is nearest stance ``s``'s (``clock_ns``: the trial's zero)."""
+    return min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - clock_ns) * 1e-9 - s.touchdown_s))
+
+
 def outside_truth(path: Path, touchdown_moment: str, ground_damping: float = 0.0) -> tuple:
     """An outside recording measured as discovery measures it (:func:`measured_outside`) with, per stance,
     its hop of the truth, the truth's law as a candidate would be simulated (``touchdown_moment``) and its ground.
@@ -128,7 +133,7 @@ def outside_truth(path: Path, touchdown_moment: str, ground_damping: float = 0.0
     strict = replace(STRICT_GROUND, damping_n_s_m=ground_damping) if ground_damping else STRICT_GROUND
     hops, laws, grounds = [], [], []
     for s in trial.stances:
-        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - clock_ns) * 1e-9 - s.touchdown_s))
+        hop = truth_hop(truth, clock_ns, s)
         spec, coefs = truth_law(hop)
         m_td = true_touchdown_moment(touchdown_moment, truth, hop, s, clock_ns, spec, coefs)
         hops.append(hop)

@@ -17,7 +17,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-from discovery_truth_gap import measured_outside  # bench/ is sys.path[0]
+from discovery_truth_gap import measured_outside, truth_hop  # bench/ is sys.path[0]
 
 REPO = Path(__file__).resolve().parents[1]
 JOINTS = ("ankle", "knee", "hip")
@@ -44,11 +44,10 @@ def file_errors(path: Path) -> np.ndarray:
     _, truth, trial, clock_ns = measured_outside(path)
     rows = np.asarray(truth["stance_truth"]["rows"], float)
     cols = truth["stance_truth"]["columns"]
-    epoch = truth["recording"]["epoch_start_ns"]
-    offset = (clock_ns - epoch) * 1e-9
+    offset = (clock_ns - truth["recording"]["epoch_start_ns"]) * 1e-9
     out = []
     for s in trial.stances:
-        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - epoch) * 1e-9 - offset - s.touchdown_s))
+        hop = truth_hop(truth, clock_ns, s)
         out.append(stance_errors(s, rows[rows[:, cols.index("hop")] == hop["hop"]], cols, offset))
     return np.array(out)
 
