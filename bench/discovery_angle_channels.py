@@ -61,14 +61,15 @@ def truth_channels(rec, trial, folder: Path, name: str) -> np.ndarray:
     import sys
 
     sys.path.insert(0, str(Path(__file__).parent))
-    from discovery_truth_gap import STRICT_GROUND, fitted_law, true_touchdown_moment, truth_law
+    from discovery_truth_gap import STRICT_GROUND, fitted_law, trial_clock_ns, true_touchdown_moment, truth_hop, truth_law
 
     truth = json.loads((folder / f"{name}.truth.json").read_text())
+    clock_ns = trial_clock_ns(rec, trial)  # the trial's zero (the latency-shifted first stamp)
     out = []
     for s in trial.stances:
-        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
+        hop = truth_hop(truth, clock_ns, s)
         spec, coefs = truth_law(hop)
-        law = fitted_law("estimated", spec, coefs, true_touchdown_moment("estimated", truth, hop, s, rec.start_ns,
+        law = fitted_law("estimated", spec, coefs, true_touchdown_moment("estimated", truth, hop, s, clock_ns,
                                                                          spec, coefs), s)
         try:
             sim = fs.simulate_for_gap(trial.chain, law, STRICT_GROUND, s)

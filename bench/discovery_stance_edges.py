@@ -57,6 +57,8 @@ from discovery_truth_gap import (  # noqa: E402  (a sibling bench script)
     TOUCHDOWN_MOMENTS,
     fitted_law,
     outside_truth,
+    trial_clock_ns,
+    truth_hop,
 )
 
 
@@ -99,7 +101,7 @@ def state_line(label: str, d_rho: np.ndarray, d_omega: np.ndarray) -> None:
           f"(SD {np.round(d_omega.std(0), 2).tolist()})")
 
 
-def truth_state(truth: dict, rec, trial: MeasuredTrial) -> tuple[np.ndarray, np.ndarray]:
+def truth_state(truth: dict, clock_ns: int, trial: MeasuredTrial) -> tuple[np.ndarray, np.ndarray]:
     """Per stance, the outside truth's joint angles and flexion rates at the stance's first plate sample
     (``stance_truth``, 5 ms rows, interpolated), in our convention. The truth's ``rho_t`` falls with flexion:
     ``rho_t1 = alpha_t - (q1 - q2)``, ``rho_t2 = pi - (q3 - q2)``, ``rho_t3 = pi - (q3 - q4)``; its ``w`` is our rate."""
@@ -107,9 +109,9 @@ def truth_state(truth: dict, rec, trial: MeasuredTrial) -> tuple[np.ndarray, np.
     cols = truth["stance_truth"]["columns"]
     rho, omega = [], []
     for s in trial.stances:
-        hop = min(truth["per_hop"], key=lambda h: abs((h["t_td_ns"] - rec.start_ns) * 1e-9 - s.touchdown_s))
+        hop = truth_hop(truth, clock_ns, s)
         r = rows[rows[:, cols.index("hop")] == hop["hop"]]
-        t = (rec.start_ns - truth["recording"]["epoch_start_ns"]) * 1e-9 + s.touchdown_s + float(s.t_s[0])
+        t = (clock_ns - truth["recording"]["epoch_start_ns"]) * 1e-9 + s.touchdown_s + float(s.t_s[0])
         rho_t = np.array([np.interp(t, r[:, 0], r[:, cols.index(f"rho_{j}")]) for j in ("ankle", "knee", "hip")])
         # our rho1 = q1 - q2 + alpha: from the truth's, q1 - q2 = alpha_t - rho_t1
         rho.append(np.array([truth["subject"]["alpha"] - rho_t[0] + trial.chain.alpha_rad, 2 * np.pi - rho_t[1],
@@ -120,9 +122,10 @@ def truth_state(truth: dict, rec, trial: MeasuredTrial) -> tuple[np.ndarray, np.
 
 def outside(path: Path, touchdown_moment: str = TOUCHDOWN_MOMENTS[0]) -> None:
     rec, truth, trial, hops, laws, grounds = outside_truth(path, touchdown_moment)
-    contacts = [((h["t_td_ns"] - rec.start_ns) * 1e-9, (h["t_to_ns"] - rec.start_ns) * 1e-9) for h in hops]
+    clock_ns = trial_clock_ns(rec, trial)  # the trial's zero (the latency-shifted first stamp)
+    contacts = [((h["t_td_ns"] - clock_ns) * 1e-9, (h["t_to_ns"] - clock_ns) * 1e-9) for h in hops]
     report(path.stem, trial, contacts, laws, grounds)
-    (rho, omega), (rho_t, omega_t) = joint_state(trial), truth_state(truth, rec, trial)
+    (rho, omega), (rho_t, omega_t) = joint_state(trial), truth_state(truth, clock_ns, trial)
     state_line("minus the truth's at the first sample", rho - rho_t, omega - omega_t)
 
 

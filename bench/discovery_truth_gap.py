@@ -117,7 +117,14 @@ def measured_outside(path: Path) -> tuple:
     latency = 0.0
     if "stream_latency" in truth["effects"]:  # "marker content lags its stamps by 20.5 ms"
         latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
-    return rec, truth, measure_trial(rec, marker_latency_s=latency), shift_marker_stream(rec, latency).start_ns
+    trial = measure_trial(rec, marker_latency_s=latency)
+    return rec, truth, trial, trial_clock_ns(rec, trial)
+
+
+def trial_clock_ns(rec, trial) -> int:
+    """The zero of ``trial``'s times on the recording's clock: its first stamp once the markers are shifted by the
+    trial's marker latency (earlier than ``rec.start_ns`` when they lag; 17 ms on the outside file 1701)."""
+    return shift_marker_stream(rec, trial.marker_latency_s).start_ns
 
 
 def truth_hop(truth: dict, clock_ns: int, s) -> dict:
