@@ -87,6 +87,7 @@ def knee_parts(stance: dict) -> tuple[dict, float]:
     eq3 = sum(parts[p] for p in ("k0 term", "k1 term", "k2/k3", "damping", "m0"))
     parts["rest"] = parts["net"] - eq3 - parts["push-off"] - parts["spring"]
     parts["flexion"] = dr
+    parts["ankle flexion"] = np.asarray(sm["rho_rad"], float)[:, 0] - stance["impedance"]["ankle"]["rho0_rad"]
     parts["activation"] = a
     mismatch = float(np.max(np.abs(eq3 - np.asarray(sm["eq3_moments_nm"], float)[:, KNEE])))
     return parts, mismatch
@@ -108,17 +109,22 @@ def stance_row(measured, stance: dict, freq_hz: float) -> dict:
     k = int(np.argmax(parts["net"]))
     angle = measured.joints.angle_rad[:, KNEE]
     rom_truth = float(parts["flexion"].max())
+    c, seed_rom = stance["impedance"]["knee"], SEED_TABLE1[freq_hz]["rom"][KNEE]
     return {
         "index": stance["index"] + 1,
         "at_max": {p: float(parts[p][k]) for p in PARTS},
         "mean": {p: float(np.mean(parts[p])) for p in PARTS},
         "when": float(k / max(len(parts["net"]) - 1, 1)),
         "flexion_at_max": float(parts["flexion"][k]),
+        "ankle_at_max": float(parts["ankle flexion"][k]),
+        "spring_least": (float(parts["spring"].min()), float(np.argmin(parts["spring"]) / max(len(parts["net"]) - 1, 1))),
         "activation_at_max": float(parts["activation"][k]),
         "rom_truth": rom_truth,
         "rom_analysis": float(angle.max() - angle[0]),
         "analysis_max": float(measured.joints.moment_nm[:, KNEE].max()),
         "law_over_range": table2_law_moment(freq_hz, KNEE, rom_truth),
+        # the stance's own Eq. 3 elastic part (activation at the maximum) had the knee flexed seed Table 1's range
+        "own_law_at_seed_range": float(parts["activation"][k] * (c["k0"] * seed_rom + c["k1"] * seed_rom**2 / 2)),
         "mismatch": mismatch,
     }
 
@@ -132,7 +138,9 @@ def row_line(r: dict) -> str:
             f"    stance means: {mean}\n"
             f"    knee range touchdown -> maximal flexion: truth {r['rom_truth']:.3f}, analysis {r['rom_analysis']:.3f} rad; "
             f"Table 2 law over it {r['law_over_range']:.1f} N m; analysis' maximal moment {r['analysis_max']:.1f} N m; "
-            f"Eq. 3 recomputed vs truth {r['mismatch']:.2g} N m")
+            f"Eq. 3 recomputed vs truth {r['mismatch']:.2g} N m\n"
+            f"    ankle flexion at the knee maximum {r['ankle_at_max']:+.3f} rad; the spring's least knee moment "
+            f"{r['spring_least'][0]:+.1f} N m at {r['spring_least'][1]:.2f} of stance")
 
 
 def summary_lines(rows: list[dict], freq_hz: float) -> list[str]:
@@ -151,12 +159,14 @@ def summary_lines(rows: list[dict], freq_hz: float) -> list[str]:
     law = table2_law_moment(freq_hz, KNEE, rom_a)
     lines.append(f"  simulator's net maximum {at['net']:.1f} N m ({at['net'] / seed['mmax'][KNEE] - 1:+.0%}), the analysis' "
                  f"{analysis_max:.1f} N m ({analysis_max / seed['mmax'][KNEE] - 1:+.0%}; over the band's top "
-                 f"{analysis_max - top:+.1f} N m); flexion at it {np.mean([r['flexion_at_max'] for r in rows]):.3f} rad, "
+                 f"{analysis_max - top:+.1f} N m); knee / ankle flexion at it {np.mean([r['flexion_at_max'] for r in rows]):.3f}"
+                 f" / {np.mean([r['ankle_at_max'] for r in rows]):.3f} rad, "
                  f"a {np.mean([r['activation_at_max'] for r in rows]):.3f}")
     lines.append(f"  knee range: truth {rom:.3f} rad ({rom / seed['rom'][KNEE] - 1:+.0%}), analysis {rom_a:.3f} rad "
                  f"({rom_a / seed['rom'][KNEE] - 1:+.0%}); Table 2's law over the analysis' range {law:.1f} N m "
                  f"({law / seed['mmax'][KNEE] - 1:+.0%}), over seed Table 1's "
-                 f"{table2_law_moment(freq_hz, KNEE, seed['rom'][KNEE]):.1f} N m")
+                 f"{table2_law_moment(freq_hz, KNEE, seed['rom'][KNEE]):.1f} N m; the stances' own Eq. 3 elastic part "
+                 f"over seed Table 1's range {np.mean([r['own_law_at_seed_range'] for r in rows]):.1f} N m")
     return lines
 
 
