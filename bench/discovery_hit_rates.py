@@ -182,7 +182,7 @@ def main() -> None:
                          "D s after touchdown (session 22's option)")
     add_two_segment_arguments(ap, "--simulate-from")
     ap.add_argument("--angle-terms", default=None, metavar="TERMS",
-                    help="model.ANGLE_TERMS, e.g. k1 (seed 000's Eq. 10) or k1,k2 (Eq. 3, the default)")
+                    help="model.ANGLE_TERMS, e.g. k1 (seed 000's Eq. 10, the default since session 30) or k1,k2 (Eq. 3)")
     ap.add_argument("--energy-pairs", action="store_true",
                     help="forward_selection.ENERGY_PAIRS = True (session 19's option): when no single candidate passes, "
                          "a loss and the push-off that replaces it tried together")

@@ -148,16 +148,17 @@ class ModelSpec:
         return name in self.effects
 
 
-#: Terms the angle-dependent stiffness adds to ``k0``: seed 000's Eq. 3 ``k1``, ``k2`` (sessions 1-17, the default)
-#: or its reduced Eq. 10 ``K = k0 + k1 (rho - rho0)`` (``("k1",)``, session 18's option, off). Why the option: on the
-#: second generator's touchdown-referenced angle law (K from 0.33 of its mid-stance value at the ankle) the pooled
-#: fit on the stances' cores with ``k2`` extrapolates K at touchdown badly (seed 1: ankle 269 - 235 d + 264 d^2 against
-#: the truth's 86 + 215 d; k0 + k1 alone: 160 + 109 d), and at the hip, whose 0.07-0.2 rad of flexion leave the
-#: ID moment's body errors (8-24 N m RMS) to dominate, k1/k2 come out at +-1e4..2e5 and the simulation blows up.
-#: Session 29 on that day's default (docs/discovery.md, "Session 29 (lead)"): outside 5/8 exact and 0/6 false (the
-#: default's names), our simulator's sweep 3/10 (as the default), second generator nulls 0/60 and angle 3/9 (default
-#: 2/9); our simulator's 60 nulls with it alone are not measured yet.
-ANGLE_TERMS: tuple[str, ...] = ("k1", "k2")
+#: Terms the angle-dependent stiffness adds to ``k0``: seed 000's reduced Eq. 10 ``K = k0 + k1 (rho - rho0)``, the
+#: default since session 30, or its Eq. 3 ``k1``, ``k2`` (``("k1", "k2")``, the default of sessions 1-29). Why the
+#: reduced law: it is the model seed 000's F-tests reduce Eq. 3 to and the one a controller is given, and on the second
+#: generator's touchdown-referenced angle law (K from 0.33 of its mid-stance value at the ankle) the pooled fit on the
+#: stances' cores with ``k2`` extrapolates K at touchdown badly (seed 1: ankle 269 - 235 d + 264 d^2 against the
+#: truth's 86 + 215 d; k0 + k1 alone: 160 + 109 d), and at the hip, whose 0.07-0.2 rad of flexion leave the ID
+#: moment's body errors (8-24 N m RMS) to dominate, k1/k2 came out at +-1e4..2e5 and the simulation blew up.
+#: Measured before the switch (docs/discovery.md, "Session 29 (lead)" and "Session 30"): outside 5/8 exact and 0/6
+#: false (Eq. 3's names file for file), our simulator's sweep 3/10 (as Eq. 3), its 60 nulls 0/60 and the second
+#: generator's 0/60, that generator's angle law 3/9 (Eq. 3: 2/9).
+ANGLE_TERMS: tuple[str, ...] = ("k1",)
 
 
 def elastic_terms(spec: ModelSpec) -> tuple[str, ...]:

@@ -1,10 +1,11 @@
-"""``model.ANGLE_TERMS`` (session 18, an option): the angle law as seed 000's reduced Eq. 10, ``K = k0 + k1 (rho - rho0)``.
+"""``model.ANGLE_TERMS``: the angle law as seed 000's reduced Eq. 10, ``K = k0 + k1 (rho - rho0)`` (session 18's option,
+the default since session 30), or Eq. 3's ``k1, k2``.
 
 Synthetic stances built from the package's own feature function (through ``fit_joint_law``): four stances with a
 flex-extend angle course per joint and the moments of a touchdown-referenced angle law
 ``M = M_td + kc dr + k1 dr^2 / 2`` (``K`` from ``kc`` at touchdown, growing with flexion, as the second generator's
 default angle case and the outside generator's) plus white noise. With the option the law has exactly the terms
-``k0, k1`` and the fit on the stances' cores returns ``kc`` and ``k1``; the default keeps Eq. 3's ``k1, k2``.
+``k0, k1`` and the fit on the stances' cores returns ``kc`` and ``k1``; Eq. 3's option has ``k1, k2``.
 """
 
 from __future__ import annotations
@@ -27,9 +28,10 @@ def stances(noise_nm: float, seed: int = 0):
 
 
 def test_reduced_angle_law_has_eq10_terms_and_recovers_the_touchdown_stiffness(monkeypatch):
-    assert feature_names(SPEC) == ("k0", "k1", "k2")  # the default: Eq. 3's k1 and k2
+    assert feature_names(SPEC) == ("k0", "k1")  # the default: Eq. 10's k1
+    monkeypatch.setattr(model, "ANGLE_TERMS", ("k1", "k2"))
+    assert feature_names(SPEC) == ("k0", "k1", "k2")  # Eq. 3's option
     monkeypatch.setattr(model, "ANGLE_TERMS", ("k1",))
-    assert feature_names(SPEC) == ("k0", "k1")
     assert stiffness_gate.effect_terms(SPEC, "angle_dependent_stiffness") == ("k1",)
     monkeypatch.setattr(identify, "EQ7_FIT", False)
     coefs, _ = identify.fit_joint_law(SPEC, stances(noise_nm=2.0))
