@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from hop_impedance.discovery import forward_selection as fs
+from hop_impedance.discovery import model
 from hop_impedance.discovery.forward import ground_of
 from hop_impedance.discovery.forward_selection import identification_reference, law_gaps
 from hop_impedance.discovery.identify import identify, touchdown_moments
@@ -51,7 +52,7 @@ def truth_law(hop: dict) -> tuple[ModelSpec, np.ndarray]:
     effects, cols = [], [list(law["kc"])]
     if any(law["k1"]):
         effects.append("angle_dependent_stiffness")
-        cols += [list(law["k1"]), [0.0] * 3]
+        cols += [list(law["k1"])] + [[0.0] * 3] * (len(model.ANGLE_TERMS) - 1)  # Eq. 3's k2 (an option) is 0
     if any(law["k3"]):
         effects.append("rate_dependent_stiffness")
         cols.append(list(law["k3"]))  # speed form: k3 S_speed
