@@ -7,7 +7,7 @@ With ``dr = rho - rho0`` and ``dw = omega - omega0`` (touchdown values),
 touchdown:
 
     M = a(t) * E + D + P,
-    E = k0 dr [+ k1 dr^2/2 + k2 dr^3/3]  (angle_dependent_stiffness)
+    E = k0 dr [+ k1 dr^2/2 (+ k2 dr^3/3: Eq. 3, ANGLE_TERMS)]  (angle_dependent_stiffness; Eq. 10 by default)
           [+ k3 S] or [+ k3 S_speed] (rate_form)                         (rate_dependent_stiffness)
     D = b0 dw + b1 dw^2/2                                              (joint_damping)
     P = A sin^2(pi (t - onset) / duration) on [onset, onset + duration]  (active_push_off)

@@ -37,7 +37,7 @@ round's current model, and its search is reused (``workflow._gated``).
 
 Session 10 (the lead's decision to test, options here, NOT the default): :data:`SHOOT_EFFECT_SIZE` gives the
 candidate the freedom of its own effect too: its ``k0`` factors AND one linear factor, the effect's size, on
-its own effect's terms at every joint (:func:`effect_terms`: the angle law's ``k1, k2``, the rate law's
+its own effect's terms at every joint (:func:`effect_terms`: the angle law's ``k1`` (and ``k2`` under Eq. 3), the rate law's
 ``k3``, the activation's ``act_*``, damping's ``b0, b1``; the push-off's ``push``, whose size the per-stance
 amplitude absorbs anyway; a ground or sensor effect has none), within :data:`EFFECT_FACTOR_BOUNDS` (0 = the
 effect off: in the first round the candidate nests the current model, and its search also starts from the
@@ -304,7 +304,7 @@ def shoot_held_out(ev: fs.HeldOutEvaluator, spec_fit: ModelSpec, start: HeldOutS
 def effect_terms(spec_fit: ModelSpec, effect: str | None) -> tuple[str, ...]:
     """The joint-law terms ``effect`` brings into ``spec_fit`` (none for the baseline or a ground/sensor effect).
 
-    E.g. ``k1, k2`` for the angle law, ``k3`` for the rate law, ``act_*`` for the activation, ``b0, b1`` for
+    E.g. ``k1`` for the angle law (``model.ANGLE_TERMS``), ``k3`` for the rate law, ``act_*`` for the activation, ``b0, b1`` for
     damping, ``push`` for the push-off (and the activation terms of an added elastic term).
     """
     if effect is None or effect not in JOINT_EFFECTS or not spec_fit.has(effect):
