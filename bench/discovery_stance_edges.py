@@ -55,9 +55,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from discovery_truth_gap import (  # noqa: E402  (a sibling bench script)
     STRICT_GROUND,
     TOUCHDOWN_MOMENTS,
+    first_sample_truth,
     fitted_law,
     outside_truth,
-    trial_clock_ns,
     truth_hop,
 )
 
@@ -105,24 +105,19 @@ def truth_state(truth: dict, clock_ns: int, trial: MeasuredTrial) -> tuple[np.nd
     """Per stance, the outside truth's joint angles and flexion rates at the stance's first plate sample
     (``stance_truth``, 5 ms rows, interpolated), in our convention. The truth's ``rho_t`` falls with flexion:
     ``rho_t1 = alpha_t - (q1 - q2)``, ``rho_t2 = pi - (q3 - q2)``, ``rho_t3 = pi - (q3 - q4)``; its ``w`` is our rate."""
-    rows = np.asarray(truth["stance_truth"]["rows"], float)
-    cols = truth["stance_truth"]["columns"]
     rho, omega = [], []
     for s in trial.stances:
         hop = truth_hop(truth, clock_ns, s)
-        r = rows[rows[:, cols.index("hop")] == hop["hop"]]
-        t = (clock_ns - truth["recording"]["epoch_start_ns"]) * 1e-9 + s.touchdown_s + float(s.t_s[0])
-        rho_t = np.array([np.interp(t, r[:, 0], r[:, cols.index(f"rho_{j}")]) for j in ("ankle", "knee", "hip")])
+        rho_t = first_sample_truth(truth, hop, clock_ns, s, "rho")
         # our rho1 = q1 - q2 + alpha: from the truth's, q1 - q2 = alpha_t - rho_t1
         rho.append(np.array([truth["subject"]["alpha"] - rho_t[0] + trial.chain.alpha_rad, 2 * np.pi - rho_t[1],
                              2 * np.pi - rho_t[2]]))
-        omega.append([np.interp(t, r[:, 0], r[:, cols.index(f"w_{j}")]) for j in ("ankle", "knee", "hip")])
+        omega.append(first_sample_truth(truth, hop, clock_ns, s, "w"))
     return np.array(rho), np.array(omega)
 
 
 def outside(path: Path, touchdown_moment: str = TOUCHDOWN_MOMENTS[0]) -> None:
-    rec, truth, trial, hops, laws, grounds = outside_truth(path, touchdown_moment)
-    clock_ns = trial_clock_ns(rec, trial)  # the trial's zero (the latency-shifted first stamp)
+    _, truth, trial, hops, laws, grounds, clock_ns = outside_truth(path, touchdown_moment)
     contacts = [((h["t_td_ns"] - clock_ns) * 1e-9, (h["t_to_ns"] - clock_ns) * 1e-9) for h in hops]
     report(path.stem, trial, contacts, laws, grounds)
     (rho, omega), (rho_t, omega_t) = joint_state(trial), truth_state(truth, clock_ns, trial)

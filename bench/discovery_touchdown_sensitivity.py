@@ -159,7 +159,7 @@ def outside_fit(path: Path, window_s: float | None, deltas: list[float] | None =
                 two_segment: bool = False) -> None:
     """:func:`take_off_errors` (or with ``deltas`` :func:`late_start_errors`) on an outside recording with its truth
     law (``discovery_truth_gap.outside_truth``)."""
-    _, _, trial, _, laws, grounds = outside_truth(path, "estimated")
+    _, _, trial, _, laws, grounds, _ = outside_truth(path, "estimated")
     if deltas:
         late_start_errors(trial, laws, grounds, deltas, path.stem, two_segment)
     else:

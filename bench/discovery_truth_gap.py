@@ -96,11 +96,18 @@ def true_touchdown_moment(how: str, truth: dict, hop: dict, s, start_ns: int, sp
         return np.asarray(hop["law"]["M_td"], float)
     if how == "estimated":
         return touchdown_moments(spec, coefs, s)
+    return first_sample_truth(truth, hop, start_ns, s, "M")
+
+
+def first_sample_truth(truth: dict, hop: dict, clock_ns: int, s, column: str) -> np.ndarray:
+    """The truth's ``stance_truth`` column ``<column>_<joint>`` (ankle, knee, hip) of ``hop``, interpolated at stance
+    ``s``'s first plate sample (``clock_ns``: the trial's zero), shape (3,)."""
     rows = np.asarray(truth["stance_truth"]["rows"], float)
     cols = truth["stance_truth"]["columns"]
     r = rows[rows[:, cols.index("hop")] == hop["hop"]]
-    t = (start_ns - truth["recording"]["epoch_start_ns"]) * 1e-9 + s.touchdown_s + float(s.t_s[0])
-    return np.array([np.interp(t, r[:, cols.index("t_s")], r[:, cols.index(f"M_{j}")]) for j in ("ankle", "knee", "hip")])
+    t = (clock_ns - truth["recording"]["epoch_start_ns"]) * 1e-9 + s.touchdown_s + float(s.t_s[0])
+    return np.array([np.interp(t, r[:, cols.index("t_s")], r[:, cols.index(f"{column}_{j}")])
+                     for j in ("ankle", "knee", "hip")])
 
 
 def fitted_law(how: str, spec, coefs, m_td, s) -> FittedLaw:
@@ -136,7 +143,7 @@ def truth_hop(truth: dict, clock_ns: int, s) -> dict:
 def outside_truth(path: Path, touchdown_moment: str, ground_damping: float = 0.0) -> tuple:
     """An outside recording measured as discovery measures it (:func:`measured_outside`) with, per stance,
     its hop of the truth, the truth's law as a candidate would be simulated (``touchdown_moment``) and its ground.
-    Returns (recording, truth, trial, hops, laws, grounds)."""
+    Returns (recording, truth, trial, hops, laws, grounds, clock_ns), ``clock_ns`` the trial's zero."""
     rec, truth, trial, clock_ns = measured_outside(path)
     strict = replace(STRICT_GROUND, damping_n_s_m=ground_damping) if ground_damping else STRICT_GROUND
     hops, laws, grounds = [], [], []
@@ -147,7 +154,7 @@ def outside_truth(path: Path, touchdown_moment: str, ground_damping: float = 0.0
         hops.append(hop)
         laws.append(fitted_law(touchdown_moment, spec, coefs, m_td, s))
         grounds.append(SURFACES[hop["surface"]] if "surface_compliance" in truth["effects"] else strict)
-    return rec, truth, trial, hops, laws, grounds
+    return rec, truth, trial, hops, laws, grounds, clock_ns
 
 
 def main() -> None:
@@ -163,7 +170,7 @@ def main() -> None:
     folder = Path(args.folder)
     cases = args.cases or sorted(p.name[:-5] for p in folder.glob("*.mcap"))
     for case in cases:
-        rec, truth, trial, hops, laws, grounds = outside_truth(folder / f"{case}.mcap", args.touchdown_moment,
+        rec, truth, trial, hops, laws, grounds, _ = outside_truth(folder / f"{case}.mcap", args.touchdown_moment,
                                                                  args.ground_damping)
         offset = 0.0
         if "force_plate_offset" in truth["effects"]:  # "constant +25.5 N added to force.z"
