@@ -27,14 +27,15 @@ Usage: .venv/bin/python bench/simulator_energy_budget.py [--hops 5] [--freqs 1.5
                    [--posture-sd RAD --seeds 1,2,3]]
        .venv/bin/python bench/simulator_energy_budget.py --lossless --hopper seed-like [--hops 30] [--no-feedback]
                    [--perturb FRACTION]
-       .venv/bin/python bench/simulator_energy_budget.py --find-orbits [--to HZ] [--write]
+       .venv/bin/python bench/simulator_energy_budget.py --find-orbits [--write] [--newton-continuation [--to HZ]]
 (``--write`` also writes docs/simulator_energy.md; ``--trunk K`` adds a trunk-balance moment of
 stiffness K N m/rad; ``--lossless`` runs issue 17's passive test instead: no damping, no push-off,
 lossless surface, per hop stance time, COM apex and energy by component, hop N against hop 3;
 ``--balance`` chooses how the trunk is held, ``--periodic`` adds the periodic hop and its eigenvalues,
 ``--landing`` starts on it and lands along its touchdown rates, ``--posture-sd`` adds touchdown noise;
 ``--hopper seed-like`` runs the seed-like hopper's lossless counterpart from its stored periodic hops with the
-landing feedback (issue 17, session 15), ``--find-orbits`` finds them again.)
+landing feedback (issue 17, session 15), ``--find-orbits`` finds them again: time-symmetric hops from stored turning
+points since session 31, session 15's Newton continuation with ``--newton-continuation``.)
 """
 
 from __future__ import annotations
@@ -256,10 +257,16 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False, extr
     """
     from hop_impedance.simulation.hopping_trial import touchdown_state_vector
     from hop_impedance.simulation.periodic_hop import landing_feedback, periodic_hop, touchdown_vector
-    from hop_impedance.simulation.scenarios import lossless_hopper_config, seed_like_hopper_options
+    from hop_impedance.simulation.scenarios import (
+        SEED_LIKE_LOSSLESS_TOLERANCES,
+        lossless_hopper_config,
+        seed_like_hopper_options,
+    )
 
     options = {**seed_like_hopper_options(), **(extra or {})}
+    rtol, atol = SEED_LIKE_LOSSLESS_TOLERANCES  # the stored hops' (scenarios.seed_like_lossless_counterpart)
     chain, config = lossless_hopper_config(path[0], 30, options)
+    config = dataclasses.replace(config, rtol=rtol, atol=atol)
     cal = _calibration(chain, config)
     hop = periodic_hop(chain, config, cal, touchdown_vector(cal.speed_m_s, 0.0, cal.com_ahead_m,
                                                             cal.touchdown_rates_rad_s))
@@ -269,6 +276,7 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False, extr
     out = {}
     for freq in path:
         chain, config = lossless_hopper_config(freq, SETTLE_HOPS, options)
+        config = dataclasses.replace(config, rtol=rtol, atol=atol)
         landing = hop.state[3:] if feedback is None else feedback.landing_ref
         config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in landing),
                                      landing_feedback=feedback)
@@ -305,6 +313,55 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False, extr
               + ", ".join(f"{v:.3f}" for v in out[freq]["closed_loop_moduli"][:4]), flush=True)
         if not out[freq]["found"]:
             break
+    return out
+
+
+#: ``--find-orbits`` (session 31): per seed frequency's law the turning point a time-symmetric periodic hop starts
+#: from (periodic_hop.symmetric_hop: joint flexions from the touchdown posture (rad), COM ahead of the toe (m), toe
+#: height (m), the last held: it picks the hop's energy). How they were found (session 31, docs/simulator.md): at
+#: 2.2 Hz's law from a random scan of turning points that take off (a hop of 59 ms flight, 4.3 mm of COM rise: too
+#: low, so 2.2 Hz keeps session 15's hop); 1.87 Hz's by continuation from it (in the law's frequency with the take-off
+#: speed held at 0.2 m/s to 1.925 Hz, then with the toe height held at -9.21 mm); the same continuation stalls near
+#: 1.85 Hz (residual 1e-2, at take-off speeds 0.2-0.6 m/s), so 1.53 Hz's law has none.
+SYMMETRIC_TURNING_POINTS = {
+    1.87: (0.5809628137694497, 0.27423622846820433, 0.07664423027548492, -0.0007061212646238073, -0.009209738759627484),
+}
+
+
+def find_symmetric_orbits(turning_points: dict | None = None) -> dict:
+    """The periodic hops of the seed-like hopper's lossless counterpart from time-symmetric stances (session 31):
+    per law frequency of :data:`SYMMETRIC_TURNING_POINTS` the symmetric hop (periodic_hop.symmetric_hop), checked and
+    polished as a fixed point of the trial's own hop map landing along its touchdown rates (periodic_hop.periodic_hop),
+    and the landing feedback that makes it attract (periodic_hop.landing_feedback).
+    Returns {frequency: dict of the hop (scenarios.SEED_LIKE_LOSSLESS_HOPS' entries) and its eigenvalues}."""
+    from hop_impedance.simulation.hopping_trial import given_start_calibration
+    from hop_impedance.simulation.periodic_hop import landing_feedback, periodic_hop, symmetric_hop
+    from hop_impedance.simulation.scenarios import seed_like_lossless_counterpart
+
+    out = {}
+    for freq, mid in (turning_points or SYMMETRIC_TURNING_POINTS).items():
+        chain, config = seed_like_lossless_counterpart(freq)
+        mid, x, res = symmetric_hop(chain, config, np.asarray(mid, float))
+        config = dataclasses.replace(config, com_ahead_m=float(x[2]), first_touchdown=tuple(float(v) for v in x),
+                                     landing_rates_rad_s=tuple(float(v) for v in x[3:]))
+        cal = given_start_calibration(config)
+        hop = periodic_hop(chain, config, cal, x, own_landing=True)
+        config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in hop.state[3:]))
+        cal = dataclasses.replace(cal, com_ahead_m=hop.com_ahead_m)
+        feedback, closed = landing_feedback(chain, config, cal, hop.state)
+        out[freq] = {"state": [float(v) for v in hop.state], "landing_rates_rad_s": list(feedback.landing_ref),
+                     "com_ahead_m": feedback.com_ahead_ref_m, "gain": [list(row) for row in feedback.gain],
+                     "stance_s": hop.stance_s, "flight_s": hop.flight_s, "found": bool(hop.success),
+                     "residual": float(np.abs(hop.residual).max()), "symmetric_residual": res,
+                     "turning_point": [float(v) for v in mid],
+                     "open_loop_moduli": [float(abs(v)) for v in hop.eigenvalues],
+                     "closed_loop_moduli": [float(abs(v)) for v in closed]}
+        print(f"  {freq:g} Hz: symmetric hop (turning point residual {res:.1e}; as the trial's fixed point max |P(x) - x| "
+              f"{out[freq]['residual']:.1e}), stance {1000 * hop.stance_s:.1f} ms, flight {1000 * hop.flight_s:.1f} ms "
+              f"({1 / (hop.stance_s + hop.flight_s):.2f} Hz), touchdown speed {hop.state[0]:.3f} m/s, COM vx "
+              f"{hop.state[1]:+.3f} m/s; |eigenvalues| landing along fixed rates "
+              + ", ".join(f"{v:.3f}" for v in out[freq]["open_loop_moduli"][:4]) + "; with the landing feedback "
+              + ", ".join(f"{v:.3f}" for v in out[freq]["closed_loop_moduli"][:4]), flush=True)
     return out
 
 
@@ -383,6 +440,9 @@ def main() -> None:
     parser.add_argument("--find-orbits", action="store_true",
                         help="find the stored periodic hops (find_seed_like_orbits); --write writes them into "
                              "scenarios.SEED_LIKE_LOSSLESS_HOPS_FILE")
+    parser.add_argument("--newton-continuation", action="store_true",
+                        help="with --find-orbits: session 15's continuation by Newton steps on the hop map from the "
+                             "calibrated 2.2 Hz hop (reaches 1.93 Hz) instead of the symmetric hops (session 31)")
     parser.add_argument("--at-seed-frequency", action="store_true",
                         help="with --find-orbits: the periodic hops of period 1 / the law's frequency (printed only)")
     parser.add_argument("--to", type=float, default=ORBIT_PATH[-1], metavar="HZ",
@@ -396,8 +456,12 @@ def main() -> None:
         from simulator_issue17 import biarticular_spring  # a bench beside this one: the flag's one parser
 
         extra = {"biarticular": biarticular_spring(args.biarticular)} if args.biarticular else None
-        found = find_seed_like_orbits(path, at_seed_frequency=args.at_seed_frequency, extra=extra)
-        write_orbits(found, args.write and not args.at_seed_frequency and extra is None)
+        if args.newton_continuation or args.at_seed_frequency or extra is not None:
+            found = find_seed_like_orbits(path, at_seed_frequency=args.at_seed_frequency, extra=extra)
+            write_orbits(found, args.write and not args.at_seed_frequency and extra is None)
+        else:  # 2.2 Hz's law: the continuation's first hop; the lower laws: symmetric hops (session 31)
+            found = find_seed_like_orbits(ORBIT_PATH[:1])
+            write_orbits({**found, **find_symmetric_orbits()}, args.write)
         return
     if args.lossless and args.hopper:
         for freq in (float(f) for f in args.freqs.split(",")):

@@ -37,8 +37,9 @@ from hop_impedance.simulation.hopping_trial import (
     scale_push_off,
     touchdown_posture,
     touchdown_state,
+    touchdown_state_vector,
 )
-from hop_impedance.simulation.stance import StanceSimulation, simulate_stance
+from hop_impedance.simulation.stance import StanceSimulation, StanceStart, TouchdownState, simulate_stance
 
 #: Names of the touchdown-state vector's entries (units in the module docstring).
 STATE_NAMES = ("speed_m_s", "com_vx_m_s", "com_ahead_m", "rate_q1", "rate_q2", "rate_q3", "rate_q4")
@@ -264,3 +265,70 @@ def landing_feedback(chain: Chain, config: HoppingConfig, cal: HopCalibration, s
     feedback = LandingFeedback(tuple(float(v) for v in x0), tuple(float(v) for v in landing0), float(cal.com_ahead_m),
                                tuple(tuple(float(v) for v in row) for row in gain))
     return feedback, eig[np.argsort(-np.abs(eig))]
+
+
+#: Scales of the unknowns of :func:`symmetric_hop` (joint flexions rad, COM ahead m, toe height m) for the solver.
+SYMMETRIC_SCALES = np.array([0.1, 0.1, 0.1, 0.01, 0.002])
+#: Finite-difference step of :func:`symmetric_hop`'s solver (relative): above the take-off event's timing noise.
+SYMMETRIC_DIFF_STEP = 1e-4
+#: :func:`symmetric_hop` stops below this residual (rad, m/s); else it restarts the solver, at most SYMMETRIC_RESTARTS times.
+SYMMETRIC_TOLERANCE = 1e-8
+SYMMETRIC_RESTARTS = 4
+
+
+def symmetric_stance(chain: Chain, config: HoppingConfig, mid: np.ndarray) -> StanceSimulation:
+    """The second half of a time-symmetric stance of a conservative hopper, from its turning point ``mid``.
+
+    ``mid`` = [joint flexions from the touchdown posture (rad, 3), COM ahead of the toe (m), toe height (m, < 0: the
+    surface compressed)], every velocity zero. The law is referenced to ``config.touchdown_rho_rad`` (the trial's
+    touchdown posture). A conservative system that passes a state of zero velocity retraces its path backwards in
+    time from it, so this half, mirrored, is the stance's first half.
+    """
+    rho_td = np.asarray(config.touchdown_rho_rad, float)
+    mid = np.asarray(mid, float)
+    reference = TouchdownState(np.r_[0.0, 0.0, touchdown_posture(chain, rho_td, 0.0)], np.zeros(6))
+    turning = TouchdownState(np.r_[0.0, mid[4], touchdown_posture(chain, rho_td + mid[:3], mid[3])], np.zeros(6))
+    return simulate_stance(chain, config.law, config.surface, reference, t_max_s=1.0, rtol=config.rtol,
+                           atol=config.atol, friction_coefficient=config.friction_coefficient,
+                           trunk_balance=config.trunk_balance, start=StanceStart(0.0, turning))
+
+
+def symmetric_hop(chain: Chain, config: HoppingConfig, guess: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """A periodic hop in place of a conservative hopper, built from a time-symmetric stance (session 31).
+
+    Why: Newton steps on the hop map (:func:`periodic_hop`) from the calibrated hop found no periodic hop of the
+    seed-like hopper's lossless counterpart at 1.87 and 1.53 Hz's laws (session 15). A hop whose stance passes a
+    turning point (every velocity zero, :func:`symmetric_stance`) takes off in the mirror image of its touchdown:
+    the same posture, every velocity reversed. If at take-off the joint angles are the touchdown posture's and the
+    COM moves straight up, the ballistic flight and the energy-keeping flight's landing (the take-off's segment rates
+    reversed, the take-off's posture and COM offset) close the hop exactly: a fixed point of the hop map.
+    Solved for the turning point's joint flexions and COM offset (``guess[:4]``; ``scipy.optimize.least_squares``):
+    take-off joint angles = the touchdown posture's (3) and COM vx 0 (1). The toe height there (``guess[4]``, the
+    surface's compression) is held: it picks the hop's energy in the family of periodic hops of a conservative hopper.
+
+    Returns (the turning point, the touchdown state vector (:data:`STATE_NAMES`), max |residual|). Raises ValueError
+    when the stance from ``guess`` does not take off.
+    """
+    from scipy.optimize import least_squares
+
+    rho_td = np.asarray(config.touchdown_rho_rad, float)
+    guess = np.asarray(guess, float)
+
+    def residual(u: np.ndarray) -> np.ndarray:
+        st = symmetric_stance(chain, config, np.r_[u, guess[4]])
+        if st.end_reason != "take_off":
+            return np.full(4, 1.0)  # flat: the solver stays where the stance takes off
+        return np.r_[st.rho_rad[-1] - rho_td, com_velocity(chain, st.g[-1], st.gd[-1])[0]]
+
+    if symmetric_stance(chain, config, guess).end_reason != "take_off":
+        raise ValueError("the stance from the guessed turning point does not take off")
+    u = guess[:4]
+    for _ in range(SYMMETRIC_RESTARTS):
+        sol = least_squares(residual, u, diff_step=SYMMETRIC_DIFF_STEP, x_scale=SYMMETRIC_SCALES[:4], max_nfev=100)
+        u = sol.x
+        if np.abs(sol.fun).max() < SYMMETRIC_TOLERANCE:
+            break
+    mid = np.r_[u, guess[4]]
+    st = symmetric_stance(chain, config, mid)
+    take_off = TouchdownState(st.g[-1], -st.gd[-1])  # its mirror image: the touchdown
+    return mid, touchdown_state_vector(chain, take_off), float(np.abs(sol.fun).max())
