@@ -8,12 +8,18 @@ error in % of the truth's RMS moment, the mean error (N m) and the RMS error (N 
 80 % and last 10 % (by sample), and the truth's RMS moment. The edges are where the 12 Hz low-pass of plate and markers
 runs across the impact and the take-off; the middle is what marker noise and the body table leave.
 
-    .venv/bin/python bench/foreign_id_error.py [--folder DIR] [CASE ...]
+    .venv/bin/python bench/foreign_id_error.py [--folder DIR] [--cutoffs MARKER,FORCE] [--acc-cutoff HZ] [--mean]
+                                               [CASE ...]
+
+``--cutoffs``: the analysis' marker and force low-pass cut-offs (Hz; default 12,12); ``--acc-cutoff``: segment
+accelerations (``Kinematics.qdd``, ``com_acc``) from markers low-passed at this cut-off instead, everything else as
+before (session 31's probe of where the hip's mid-stance error comes from); ``--mean``: also the mean over the files.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -52,17 +58,50 @@ def file_errors(path: Path) -> np.ndarray:
     return np.array(out)
 
 
+def use_cutoffs(marker_hz: float, force_hz: float, acc_hz: float | None) -> None:
+    """Measure every recording with these cut-offs (``--cutoffs``, ``--acc-cutoff``): a probe, patched in here."""
+    import discovery_truth_gap
+
+    from hop_impedance.biomech import analysis
+    from hop_impedance.biomech.analysis import AnalysisOptions
+
+    measure, kinematics = discovery_truth_gap.measure_trial, analysis.compute_kinematics
+    options = AnalysisOptions(marker_cutoff_hz=marker_hz, force_cutoff_hz=force_hz)
+    discovery_truth_gap.measure_trial = lambda rec, marker_latency_s=0.0: measure(rec, marker_latency_s, options)
+
+    def accelerations_at(marker_t, markers, t_out, model, cutoff_hz, max_gap_s):
+        kin, gaps = kinematics(marker_t, markers, t_out, model, cutoff_hz, max_gap_s)
+        low, _ = kinematics(marker_t, markers, t_out, model, acc_hz, max_gap_s)
+        return dataclasses.replace(kin, qdd=low.qdd, com_acc=low.com_acc), gaps
+
+    if acc_hz is not None:
+        analysis.compute_kinematics = accelerations_at
+
+
+def line(name: str, med: np.ndarray) -> str:
+    return f"{name}: " + " | ".join(
+        f"{j} {m[0]:.1f} % mean {m[1]:+.1f} edges/middle {m[2]:.1f}/{m[3]:.1f}/{m[4]:.1f} N m (RMS {m[5]:.0f})"
+        for j, m in zip(JOINTS, med))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("cases", nargs="*")
     ap.add_argument("--folder", default=str(REPO.parent / "shared" / "foreign"))
+    ap.add_argument("--cutoffs", default="12,12", metavar="MARKER,FORCE")
+    ap.add_argument("--acc-cutoff", type=float, metavar="HZ")
+    ap.add_argument("--mean", action="store_true")
     args = ap.parse_args()
+    marker_hz, force_hz = (float(v) for v in args.cutoffs.split(","))
+    if (marker_hz, force_hz, args.acc_cutoff) != (12.0, 12.0, None):
+        use_cutoffs(marker_hz, force_hz, args.acc_cutoff)
     folder = Path(args.folder)
+    medians = []
     for case in args.cases or sorted(p.name[:-5] for p in folder.glob("*.mcap")):
-        med = np.median(file_errors(folder / f"{case}.mcap"), axis=0)
-        print(f"{case}: " + " | ".join(
-            f"{j} {m[0]:.1f} % mean {m[1]:+.1f} edges/middle {m[2]:.1f}/{m[3]:.1f}/{m[4]:.1f} N m (RMS {m[5]:.0f})"
-            for j, m in zip(JOINTS, med)), flush=True)
+        medians.append(np.median(file_errors(folder / f"{case}.mcap"), axis=0))
+        print(line(case, medians[-1]), flush=True)
+    if args.mean:
+        print(line(f"mean of {len(medians)} files", np.mean(medians, axis=0)))
 
 
 if __name__ == "__main__":

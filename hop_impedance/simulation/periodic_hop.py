@@ -315,7 +315,10 @@ def symmetric_hop(chain: Chain, config: HoppingConfig, guess: np.ndarray) -> tup
     guess = np.asarray(guess, float)
 
     def residual(u: np.ndarray) -> np.ndarray:
-        st = symmetric_stance(chain, config, np.r_[u, guess[4]])
+        try:
+            st = symmetric_stance(chain, config, np.r_[u, guess[4]])
+        except ValueError:  # no posture with that COM offset (touchdown_posture)
+            return np.full(4, 1.0)
         if st.end_reason != "take_off":
             return np.full(4, 1.0)  # flat: the solver stays where the stance takes off
         return np.r_[st.rho_rad[-1] - rho_td, com_velocity(chain, st.g[-1], st.gd[-1])[0]]
