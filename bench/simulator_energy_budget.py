@@ -231,6 +231,25 @@ def periodic_line(chain, config, cal, guess=None):
             f"largest {values[k].real:+.3f}{values[k].imag:+.3f}j along [{mode_text}] (real part)")
 
 
+def stored_hop(hop, feedback, closed, found: bool) -> dict:
+    """A periodic hop and its landing feedback as scenarios.SEED_LIKE_LOSSLESS_HOPS_FILE stores them."""
+    return {"state": [float(v) for v in hop.state], "landing_rates_rad_s": list(feedback.landing_ref),
+            "com_ahead_m": feedback.com_ahead_ref_m, "gain": [list(row) for row in feedback.gain],
+            "stance_s": hop.stance_s, "flight_s": hop.flight_s, "found": found,
+            "residual": float(np.abs(hop.residual).max()),
+            "open_loop_moduli": [float(abs(v)) for v in hop.eigenvalues],
+            "closed_loop_moduli": [float(abs(v)) for v in closed]}
+
+
+def hop_summary(hop, stored: dict) -> str:
+    """The printed rest of a found hop's line: residual, timing, touchdown state and eigenvalue moduli."""
+    return (f"max |P(x) - x| {stored['residual']:.1e}), stance {1000 * hop.stance_s:.1f} ms, flight "
+            f"{1000 * hop.flight_s:.1f} ms ({1 / (hop.stance_s + hop.flight_s):.2f} Hz), touchdown speed "
+            f"{hop.state[0]:.3f} m/s, COM vx {hop.state[1]:+.3f} m/s; |eigenvalues| landing along fixed rates "
+            + ", ".join(f"{v:.3f}" for v in stored["open_loop_moduli"][:4]) + "; with the landing feedback "
+            + ", ".join(f"{v:.3f}" for v in stored["closed_loop_moduli"][:4]))
+
+
 #: ``--find-orbits``: the law frequencies the continuation steps through from 2.2 Hz (Hz): 0.01 Hz steps below 1.95 Hz,
 #: where larger steps leave the attracting hop's reach.
 ORBIT_PATH = (2.2, 2.1, 2.0, 1.975, 1.95) + tuple(round(1.94 - 0.01 * k, 2) for k in range(42))
@@ -299,18 +318,9 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False, extr
             print(f"  {freq:g} Hz: no periodic hop ({exc})", flush=True)
             break
         feedback, closed = landing_feedback(chain, config, cal, hop.state)
-        out[freq] = {"state": [float(v) for v in hop.state], "landing_rates_rad_s": list(feedback.landing_ref),
-                     "com_ahead_m": feedback.com_ahead_ref_m, "gain": [list(row) for row in feedback.gain],
-                     "stance_s": hop.stance_s, "flight_s": hop.flight_s, "found": bool(settled and hop.success),
-                     "residual": float(np.abs(hop.residual).max()),
-                     "open_loop_moduli": [float(abs(v)) for v in hop.eigenvalues],
-                     "closed_loop_moduli": [float(abs(v)) for v in closed]}
-        print(f"  {freq:g} Hz: periodic hop {'found' if out[freq]['found'] else 'NOT found'} (max |P(x) - x| "
-              f"{out[freq]['residual']:.1e}), stance {1000 * hop.stance_s:.1f} ms, flight {1000 * hop.flight_s:.1f} ms "
-              f"({1 / (hop.stance_s + hop.flight_s):.2f} Hz), touchdown speed {hop.state[0]:.3f} m/s, COM vx "
-              f"{hop.state[1]:+.3f} m/s; |eigenvalues| landing along fixed rates "
-              + ", ".join(f"{v:.3f}" for v in out[freq]["open_loop_moduli"][:4]) + "; with the landing feedback "
-              + ", ".join(f"{v:.3f}" for v in out[freq]["closed_loop_moduli"][:4]), flush=True)
+        out[freq] = stored_hop(hop, feedback, closed, bool(settled and hop.success))
+        print(f"  {freq:g} Hz: periodic hop {'found' if out[freq]['found'] else 'NOT found'} ("
+              + hop_summary(hop, out[freq]), flush=True)
         if not out[freq]["found"]:
             break
     return out
@@ -349,19 +359,10 @@ def find_symmetric_orbits(turning_points: dict | None = None) -> dict:
         config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in hop.state[3:]))
         cal = dataclasses.replace(cal, com_ahead_m=hop.com_ahead_m)
         feedback, closed = landing_feedback(chain, config, cal, hop.state)
-        out[freq] = {"state": [float(v) for v in hop.state], "landing_rates_rad_s": list(feedback.landing_ref),
-                     "com_ahead_m": feedback.com_ahead_ref_m, "gain": [list(row) for row in feedback.gain],
-                     "stance_s": hop.stance_s, "flight_s": hop.flight_s, "found": bool(hop.success),
-                     "residual": float(np.abs(hop.residual).max()), "symmetric_residual": res,
-                     "turning_point": [float(v) for v in mid],
-                     "open_loop_moduli": [float(abs(v)) for v in hop.eigenvalues],
-                     "closed_loop_moduli": [float(abs(v)) for v in closed]}
-        print(f"  {freq:g} Hz: symmetric hop (turning point residual {res:.1e}; as the trial's fixed point max |P(x) - x| "
-              f"{out[freq]['residual']:.1e}), stance {1000 * hop.stance_s:.1f} ms, flight {1000 * hop.flight_s:.1f} ms "
-              f"({1 / (hop.stance_s + hop.flight_s):.2f} Hz), touchdown speed {hop.state[0]:.3f} m/s, COM vx "
-              f"{hop.state[1]:+.3f} m/s; |eigenvalues| landing along fixed rates "
-              + ", ".join(f"{v:.3f}" for v in out[freq]["open_loop_moduli"][:4]) + "; with the landing feedback "
-              + ", ".join(f"{v:.3f}" for v in out[freq]["closed_loop_moduli"][:4]), flush=True)
+        out[freq] = {**stored_hop(hop, feedback, closed, bool(hop.success)), "symmetric_residual": res,
+                     "turning_point": [float(v) for v in mid]}
+        print(f"  {freq:g} Hz: symmetric hop (turning point residual {res:.1e}; as the trial's fixed point "
+              + hop_summary(hop, out[freq]), flush=True)
     return out
 
 
