@@ -28,6 +28,7 @@ Usage: .venv/bin/python bench/simulator_energy_budget.py [--hops 5] [--freqs 1.5
        .venv/bin/python bench/simulator_energy_budget.py --lossless --hopper seed-like [--hops 30] [--no-feedback]
                    [--perturb FRACTION]
        .venv/bin/python bench/simulator_energy_budget.py --find-orbits [--write] [--newton-continuation [--to HZ]]
+       .venv/bin/python bench/simulator_energy_budget.py --scan-turning-points HZ [--scan-count N]
 (``--write`` also writes docs/simulator_energy.md; ``--trunk K`` adds a trunk-balance moment of
 stiffness K N m/rad; ``--lossless`` runs issue 17's passive test instead: no damping, no push-off,
 lossless surface, per hop stance time, COM apex and energy by component, hop N against hop 3;
@@ -366,6 +367,29 @@ def find_symmetric_orbits(turning_points: dict | None = None) -> dict:
     return out
 
 
+def scan_turning_points(freq_hz: float, n: int, seed: int = 0) -> None:
+    """``--scan-turning-points F``: ``n`` random turning points at F Hz's law that take off (flexions 0.2-0.9 /
+    0.1-0.6 / 0-0.2 rad, COM -20..20 mm ahead of the toe, pad -12..-4 mm), each solved by periodic_hop.symmetric_hop;
+    printed (how a law without a stored turning point is searched; session 31 at 1.53 Hz)."""
+    from hop_impedance.simulation.periodic_hop import symmetric_hop, symmetric_stance
+    from hop_impedance.simulation.scenarios import seed_like_lossless_counterpart
+
+    chain, config = seed_like_lossless_counterpart(freq_hz)
+    rng = np.random.default_rng(seed)
+    found = 0
+    while found < n:
+        guess = rng.uniform([0.2, 0.1, 0.0, -0.02, -0.012], [0.9, 0.6, 0.2, 0.02, -0.004])
+        try:
+            if symmetric_stance(chain, config, guess).end_reason != "take_off":
+                continue
+        except ValueError:  # no posture with that COM offset
+            continue
+        found += 1
+        mid, x, res = symmetric_hop(chain, config, guess)
+        print(f"  {freq_hz:g} Hz, guess {np.round(guess, 3).tolist()}: turning point {np.round(mid, 4).tolist()}, "
+              f"residual {res:.1e}, touchdown speed {x[0]:.3f} m/s", flush=True)
+
+
 def write_orbits(found: dict, write: bool) -> None:
     """Print (and with ``write`` write) the periodic hops :func:`find_seed_like_orbits` found, at the seed frequencies."""
     import yaml
@@ -441,6 +465,9 @@ def main() -> None:
     parser.add_argument("--find-orbits", action="store_true",
                         help="find the stored periodic hops (find_seed_like_orbits); --write writes them into "
                              "scenarios.SEED_LIKE_LOSSLESS_HOPS_FILE")
+    parser.add_argument("--scan-turning-points", type=float, metavar="HZ",
+                        help="random turning points of symmetric hops at this law frequency (scan_turning_points)")
+    parser.add_argument("--scan-count", type=int, default=6, help="with --scan-turning-points: how many")
     parser.add_argument("--newton-continuation", action="store_true",
                         help="with --find-orbits: session 15's continuation by Newton steps on the hop map from the "
                              "calibrated 2.2 Hz hop (reaches 1.93 Hz) instead of the symmetric hops (session 31)")
@@ -452,6 +479,9 @@ def main() -> None:
                         help="with --find-orbits: a conservative knee-ankle spring in the lossless counterpart "
                              "(impedance_laws.BiarticularSpring; printed only, never written)")
     args = parser.parse_args()
+    if args.scan_turning_points:
+        scan_turning_points(args.scan_turning_points, args.scan_count)
+        return
     if args.find_orbits:
         path = ORBIT_PATH[:ORBIT_PATH.index(args.to) + 1]
         from simulator_issue17 import biarticular_spring  # a bench beside this one: the flag's one parser
