@@ -333,8 +333,11 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False, extr
 #: 2.2 Hz's law from a random scan of turning points that take off (a hop of 59 ms flight, 4.3 mm of COM rise: too
 #: low, so 2.2 Hz keeps session 15's hop); 1.87 Hz's by continuation from it (in the law's frequency with the take-off
 #: speed held at 0.2 m/s to 1.925 Hz, then with the toe height held at -9.21 mm); the same continuation stalls near
-#: 1.85 Hz (residual 1e-2, at take-off speeds 0.2-0.6 m/s), so 1.53 Hz's law has none.
+#: 1.85 Hz (residual 1e-2, at take-off speeds 0.2-0.6 m/s); 1.53 Hz's from the 4th of 6 random turning points of
+#: ``--scan-turning-points 1.53`` (residual 1.4e-4), re-solved from its guess rounded to the printed 3 decimals
+#: (0.751, 0.22, 0.175, -0.018, -0.009): residual 4.9e-10.
 SYMMETRIC_TURNING_POINTS = {
+    1.53: (1.133222232889622, 0.3399946970579296, 0.09527396188694415, -0.02010011169736547, -0.009),
     1.87: (0.5809628137694497, 0.27423622846820433, 0.07664423027548492, -0.0007061212646238073, -0.009209738759627484),
 }
 

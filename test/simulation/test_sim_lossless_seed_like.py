@@ -31,14 +31,9 @@ from hop_impedance.simulation.scenarios import (
 )
 from hop_impedance.simulation.stance import simulate_stance, stance_energy_j
 
-#: Issue 17 asks for all three seed frequencies' laws; a periodic hop of the counterpart is stored (found) at 2.2 and
-#: (since session 31: a time-symmetric hop) 1.87 Hz's; at 1.53 Hz's none is found (docs/simulator.md, session 31: the
-#: symmetric hops' continuation stalls near 1.85 Hz), so that one fails (strict: remove it once found).
-NOT_FOUND = pytest.mark.xfail(raises=ValueError, strict=True,
-                              reason="no periodic hop of the lossless counterpart found at this law (session 31)")
-#: The seed frequencies whose law has a stored periodic hop.
-STORED = (1.87, 2.2)
-FREQS = (pytest.param(1.53, marks=NOT_FOUND), *STORED)
+#: Issue 17 asks for all three seed frequencies' laws: a periodic hop of the counterpart is stored at each (2.2 Hz's
+#: session 15's; 1.87 and 1.53 Hz's time-symmetric hops, session 31; docs/simulator.md).
+STORED = (1.53, 1.87, 2.2)
 
 
 def stance_and_apex(trial, rec) -> tuple[float, float]:
@@ -80,12 +75,12 @@ def test_lossless_counterpart_has_nothing_that_works():
 
 @pytest.mark.slow
 def test_lossless_counterpart_keeps_its_hop_for_30_hops(trial):
-    """Issue 17: 30 hops without a push-off, hop 30's stance and apex within 5 % of hop 3's (2.2 and 1.87 Hz's laws;
-    measured -0.0 / +0.00 % at both, session 31)."""
+    """Issue 17: 30 hops without a push-off, hop 30's stance and apex within 5 % of hop 3's at each seed frequency's law
+    (measured -0.0 / +0.00 % at 1.87 and 2.2 Hz, session 31)."""
     assert_hop_kept(trial)
 
 
-@pytest.mark.parametrize("freq_hz", FREQS)
+@pytest.mark.parametrize("freq_hz", STORED)
 def test_every_seed_frequency_has_a_lossless_hop(freq_hz):
     """Issue 17 at every seed frequency's law: the counterpart's periodic hop is stored, its stance and flight make a
     hop, and with the landing feedback only the energy's eigenvalue (1: nothing restores energy) is not below 1."""
