@@ -267,8 +267,8 @@ def landing_feedback(chain: Chain, config: HoppingConfig, cal: HopCalibration, s
     return feedback, eig[np.argsort(-np.abs(eig))]
 
 
-#: Scales of the unknowns of :func:`symmetric_hop` (joint flexions rad, COM ahead m, toe height m) for the solver.
-SYMMETRIC_SCALES = np.array([0.1, 0.1, 0.1, 0.01, 0.002])
+#: Scales of the unknowns of :func:`symmetric_hop` (joint flexions rad, COM ahead m) for the solver.
+SYMMETRIC_SCALES = np.array([0.1, 0.1, 0.1, 0.01])
 #: Finite-difference step of :func:`symmetric_hop`'s solver (relative): above the take-off event's timing noise.
 SYMMETRIC_DIFF_STEP = 1e-4
 #: :func:`symmetric_hop` stops below this residual (rad, m/s); else it restarts the solver, at most SYMMETRIC_RESTARTS times.
@@ -327,7 +327,7 @@ def symmetric_hop(chain: Chain, config: HoppingConfig, guess: np.ndarray) -> tup
         raise ValueError("the stance from the guessed turning point does not take off")
     u = guess[:4]
     for _ in range(SYMMETRIC_RESTARTS):
-        sol = least_squares(residual, u, diff_step=SYMMETRIC_DIFF_STEP, x_scale=SYMMETRIC_SCALES[:4], max_nfev=100)
+        sol = least_squares(residual, u, diff_step=SYMMETRIC_DIFF_STEP, x_scale=SYMMETRIC_SCALES, max_nfev=100)
         u = sol.x
         if np.abs(sol.fun).max() < SYMMETRIC_TOLERANCE:
             break
