@@ -116,8 +116,9 @@ def fitted_law(how: str, spec, coefs, m_td, s) -> FittedLaw:
     return FittedLaw(spec, coefs, m_td, identification_reference(s) if how == "estimated" else None)
 
 
-def measured_outside(path: Path) -> tuple:
-    """An outside recording measured as discovery measures it, the truth's marker latency removed. Returns (recording,
+def measured_outside(path: Path, options=None) -> tuple:
+    """An outside recording measured as discovery measures it, the truth's marker latency removed (``options``: the
+    analysis' :class:`~hop_impedance.biomech.analysis.AnalysisOptions`, default its defaults). Returns (recording,
     truth, trial, clock_ns): ``clock_ns`` is the zero of the trial's times, the first stamp once the markers are
     shifted (earlier than the recording's own ``start_ns`` when they lag)."""
     rec = load_recording(path)
@@ -125,7 +126,7 @@ def measured_outside(path: Path) -> tuple:
     latency = 0.0
     if "stream_latency" in truth["effects"]:  # "marker content lags its stamps by 20.5 ms"
         latency = 1e-3 * float(truth["effect_details"]["stream_latency"].split()[-2])
-    trial = measure_trial(rec, marker_latency_s=latency)
+    trial = measure_trial(rec, marker_latency_s=latency, options=options)
     return rec, truth, trial, trial_clock_ns(rec, trial)
 
 

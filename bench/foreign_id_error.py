@@ -25,6 +25,8 @@ from pathlib import Path
 import numpy as np
 from discovery_truth_gap import measured_outside, truth_hop  # bench/ is sys.path[0]
 
+from hop_impedance.biomech.analysis import AnalysisOptions
+
 REPO = Path(__file__).resolve().parents[1]
 JOINTS = ("ankle", "knee", "hip")
 
@@ -45,9 +47,10 @@ def stance_errors(s, rows: np.ndarray, cols: list, t_offset_s: float) -> np.ndar
     return np.array(out)
 
 
-def file_errors(path: Path) -> np.ndarray:
-    """:func:`stance_errors` of every stance of one outside recording, shape (stances, 3, 6)."""
-    _, truth, trial, clock_ns = measured_outside(path)
+def file_errors(path: Path, options=None) -> np.ndarray:
+    """:func:`stance_errors` of every stance of one outside recording, shape (stances, 3, 6); ``options``: the
+    analysis' (:func:`measured_outside`)."""
+    _, truth, trial, clock_ns = measured_outside(path, options)
     rows = np.asarray(truth["stance_truth"]["rows"], float)
     cols = truth["stance_truth"]["columns"]
     offset = (clock_ns - truth["recording"]["epoch_start_ns"]) * 1e-9
@@ -58,24 +61,19 @@ def file_errors(path: Path) -> np.ndarray:
     return np.array(out)
 
 
-def use_cutoffs(marker_hz: float, force_hz: float, acc_hz: float | None) -> None:
-    """Measure every recording with these cut-offs (``--cutoffs``, ``--acc-cutoff``): a probe, patched in here."""
-    import discovery_truth_gap
-
+def accelerations_at(acc_hz: float) -> None:
+    """``--acc-cutoff``: the analysis takes segment accelerations from markers low-passed at ``acc_hz``, everything
+    else at its own cut-offs (a probe, patched in here: the analysis has no such option)."""
     from hop_impedance.biomech import analysis
-    from hop_impedance.biomech.analysis import AnalysisOptions
 
-    measure, kinematics = discovery_truth_gap.measure_trial, analysis.compute_kinematics
-    options = AnalysisOptions(marker_cutoff_hz=marker_hz, force_cutoff_hz=force_hz)
-    discovery_truth_gap.measure_trial = lambda rec, marker_latency_s=0.0: measure(rec, marker_latency_s, options)
+    kinematics = analysis.compute_kinematics
 
-    def accelerations_at(marker_t, markers, t_out, model, cutoff_hz, max_gap_s):
+    def patched(marker_t, markers, t_out, model, cutoff_hz, max_gap_s):
         kin, gaps = kinematics(marker_t, markers, t_out, model, cutoff_hz, max_gap_s)
         low, _ = kinematics(marker_t, markers, t_out, model, acc_hz, max_gap_s)
         return dataclasses.replace(kin, qdd=low.qdd, com_acc=low.com_acc), gaps
 
-    if acc_hz is not None:
-        analysis.compute_kinematics = accelerations_at
+    analysis.compute_kinematics = patched
 
 
 def line(name: str, med: np.ndarray) -> str:
@@ -93,12 +91,13 @@ def main() -> None:
     ap.add_argument("--mean", action="store_true")
     args = ap.parse_args()
     marker_hz, force_hz = (float(v) for v in args.cutoffs.split(","))
-    if (marker_hz, force_hz, args.acc_cutoff) != (12.0, 12.0, None):
-        use_cutoffs(marker_hz, force_hz, args.acc_cutoff)
+    options = AnalysisOptions(marker_cutoff_hz=marker_hz, force_cutoff_hz=force_hz)
+    if args.acc_cutoff is not None:
+        accelerations_at(args.acc_cutoff)
     folder = Path(args.folder)
     medians = []
     for case in args.cases or sorted(p.name[:-5] for p in folder.glob("*.mcap")):
-        medians.append(np.median(file_errors(folder / f"{case}.mcap"), axis=0))
+        medians.append(np.median(file_errors(folder / f"{case}.mcap", options), axis=0))
         print(line(case, medians[-1]), flush=True)
     if args.mean:
         print(line(f"mean of {len(medians)} files", np.mean(medians, axis=0)))

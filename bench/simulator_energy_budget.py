@@ -277,16 +277,9 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False, extr
     """
     from hop_impedance.simulation.hopping_trial import touchdown_state_vector
     from hop_impedance.simulation.periodic_hop import landing_feedback, periodic_hop, touchdown_vector
-    from hop_impedance.simulation.scenarios import (
-        SEED_LIKE_LOSSLESS_TOLERANCES,
-        lossless_hopper_config,
-        seed_like_hopper_options,
-    )
+    from hop_impedance.simulation.scenarios import seed_like_lossless_counterpart
 
-    options = {**seed_like_hopper_options(), **(extra or {})}
-    rtol, atol = SEED_LIKE_LOSSLESS_TOLERANCES  # the stored hops' (scenarios.seed_like_lossless_counterpart)
-    chain, config = lossless_hopper_config(path[0], 30, options)
-    config = dataclasses.replace(config, rtol=rtol, atol=atol)
+    chain, config = seed_like_lossless_counterpart(path[0], 30, extra)
     cal = _calibration(chain, config)
     hop = periodic_hop(chain, config, cal, touchdown_vector(cal.speed_m_s, 0.0, cal.com_ahead_m,
                                                             cal.touchdown_rates_rad_s))
@@ -295,8 +288,7 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False, extr
     feedback = None
     out = {}
     for freq in path:
-        chain, config = lossless_hopper_config(freq, SETTLE_HOPS, options)
-        config = dataclasses.replace(config, rtol=rtol, atol=atol)
+        chain, config = seed_like_lossless_counterpart(freq, SETTLE_HOPS, extra)
         landing = hop.state[3:] if feedback is None else feedback.landing_ref
         config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in landing),
                                      landing_feedback=feedback)
@@ -342,7 +334,7 @@ SYMMETRIC_TURNING_POINTS = {
 }
 
 
-def find_symmetric_orbits(turning_points: dict | None = None) -> dict:
+def find_symmetric_orbits() -> dict:
     """The periodic hops of the seed-like hopper's lossless counterpart from time-symmetric stances (session 31):
     per law frequency of :data:`SYMMETRIC_TURNING_POINTS` the symmetric hop (periodic_hop.symmetric_hop), checked and
     polished as a fixed point of the trial's own hop map landing along its touchdown rates (periodic_hop.periodic_hop),
@@ -353,7 +345,7 @@ def find_symmetric_orbits(turning_points: dict | None = None) -> dict:
     from hop_impedance.simulation.scenarios import seed_like_lossless_counterpart
 
     out = {}
-    for freq, mid in (turning_points or SYMMETRIC_TURNING_POINTS).items():
+    for freq, mid in SYMMETRIC_TURNING_POINTS.items():
         chain, config = seed_like_lossless_counterpart(freq)
         mid, x, res = symmetric_hop(chain, config, np.asarray(mid, float))
         config = dataclasses.replace(config, com_ahead_m=float(x[2]), first_touchdown=tuple(float(v) for v in x),

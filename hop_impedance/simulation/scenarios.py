@@ -414,10 +414,12 @@ def seed_like_lossless_hops() -> dict[float, dict]:
 SEED_LIKE_LOSSLESS_TOLERANCES = (1e-10, 1e-12)
 
 
-def seed_like_lossless_counterpart(freq_hz: float, n_hops: int = 30) -> tuple[Chain, HoppingConfig]:
+def seed_like_lossless_counterpart(freq_hz: float, n_hops: int = 30,
+                                   extra: dict | None = None) -> tuple[Chain, HoppingConfig]:
     """:func:`lossless_hopper_config` of :func:`seed_like_hopper_options` at :data:`SEED_LIKE_LOSSLESS_TOLERANCES`: the
-    hopper :func:`seed_like_lossless_config` starts on its stored periodic hop, and the one they are found for."""
-    chain, config = lossless_hopper_config(freq_hz, n_hops, seed_like_hopper_options())
+    hopper :func:`seed_like_lossless_config` starts on its stored periodic hop, and the one they are found for.
+    ``extra``: hopping_config options added to the preset's (a probe's, e.g. a biarticular spring)."""
+    chain, config = lossless_hopper_config(freq_hz, n_hops, {**seed_like_hopper_options(), **(extra or {})})
     rtol, atol = SEED_LIKE_LOSSLESS_TOLERANCES
     return chain, replace(config, rtol=rtol, atol=atol)
 
