@@ -118,7 +118,10 @@ def main() -> int:
         build_dir = ROOT / "build" / name
         stamp = build_dir / ".source_hash"
         digest = source_hash(pkg_dir)
-        if not args.force and stamp.exists() and stamp.read_text() == digest:
+        # The stamp says the sources were built; the package must also still be installed in this environment (a
+        # venv made again beside an old build/ has none: "up to date" then left `make demo` without its messages).
+        installed = (prefix / "share" / name / "package.xml").exists()
+        if not args.force and installed and stamp.exists() and stamp.read_text() == digest:
             print(f"{name}: up to date")
             continue
         if not fixed:
