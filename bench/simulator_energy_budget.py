@@ -328,9 +328,12 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False, extr
 #: 1.85 Hz (residual 1e-2, at take-off speeds 0.2-0.6 m/s); 1.53 Hz's from the 4th of 6 random turning points of
 #: ``--scan-turning-points 1.53`` (residual 1.4e-4), re-solved from its guess rounded to the printed 3 decimals
 #: (0.751, 0.22, 0.175, -0.018, -0.009): residual 4.9e-10.
+#: Session 32 (the preset's law re-found for the energy-keeping flight): each re-solved from session 31's turning point
+#: (1.53: (1.1332, 0.3400, 0.0953, -0.0201, -0.009), 1.87: (0.5810, 0.2742, 0.0766, -0.0007, -0.00921)), stored here as
+#: found so that ``--find-orbits --write`` starts on them.
 SYMMETRIC_TURNING_POINTS = {
-    1.53: (1.133222232889622, 0.3399946970579296, 0.09527396188694415, -0.02010011169736547, -0.009),
-    1.87: (0.5809628137694497, 0.27423622846820433, 0.07664423027548492, -0.0007061212646238073, -0.009209738759627484),
+    1.53: (1.1855213928120882, 0.420873784060742, 0.13973128812459235, -0.016369796989076573, -0.009),
+    1.87: (0.6280157716494259, 0.2985377253519379, 0.08377791818274717, -0.0017847487408250205, -0.009209738759627484),
 }
 
 

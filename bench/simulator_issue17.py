@@ -160,15 +160,24 @@ BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK400_80_LAW_SCALE = {
     2.2: ((0.856853, 1.212848, 1.0), (1.078409, 0.564144, 1.0)),
 }
 #: a_min 0.9, ``--surface rigid --pad 15,3 --push-timing 0.6,0.8 --trunk 500,60``, calibrated on 10-hop trials like
-#: the criteria's (session 12; since session 14 the package's preset, ``scenarios.SEED_LIKE_HOPPER_LAW_SCALE``, which
-#: ``--hopper seed-like`` takes with the rest of ``scenarios.seed_like_hopper_options``).
-BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK500_60_LAW_SCALE = SEED_LIKE_HOPPER_LAW_SCALE
+#: the criteria's (session 12; the package's preset, with the prescribed flight, from session 14 to session 31).
+BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK500_60_LAW_SCALE = {
+    1.53: ((0.951063, 0.887117, 1.0), (1.070895, 1.292072, 1.0)),
+    1.87: ((1.0, 1.0, 1.0), (1.0, 1.0, 1.0)),
+    2.2: ((0.942668, 0.999863, 1.0), (1.037431, 0.952664, 1.0)),
+}
+#: The same hopper with the energy-keeping flight landing along the prescribed direction, push-off weights 1,-0.1,0.3
+#: and half-gain control (session 22's search, re-run in session 32): the package's preset since session 32,
+#: ``scenarios.SEED_LIKE_HOPPER_LAW_SCALE``, which ``--hopper seed-like`` takes with the rest of
+#: ``scenarios.seed_like_hopper_options``.
+ENERGY_KEEPING_KM01_G05_LAW_SCALE = SEED_LIKE_HOPPER_LAW_SCALE
 LAW_SCALES = {"none": None, "seed_like": SEED_LIKE_LAW_SCALE, "bell09": BELL09_LAW_SCALE,
               "bell09_rigid_pad10": BELL09_RIGID_PAD10_LAW_SCALE, "bell09_rigid_pad15_3": BELL09_RIGID_PAD15_3_LAW_SCALE,
               "bell08_rigid_pad15_3": BELL08_RIGID_PAD15_3_LAW_SCALE,
               "bell09_rigid_pad15_3_push06_08": BELL09_RIGID_PAD15_3_PUSH06_08_LAW_SCALE,
               "bell09_rigid_pad15_3_push06_08_trunk400_80": BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK400_80_LAW_SCALE,
-              "bell09_rigid_pad15_3_push06_08_trunk500_60": BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK500_60_LAW_SCALE}
+              "bell09_rigid_pad15_3_push06_08_trunk500_60": BELL09_RIGID_PAD15_3_PUSH06_08_TRUNK500_60_LAW_SCALE,
+              "energy_keeping_km01_g05": ENERGY_KEEPING_KM01_G05_LAW_SCALE}
 
 
 @dataclass
@@ -472,7 +481,8 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     said_law = f"law Table 2{'' if args.law_scale == 'none' else ' x ' + args.law_scale}"
     said = [f"bell a_min {args.bell if args.bell is not None else options['bell_activation_min']}", said_law]
     if preset:
-        said = ["its own bell a_min 0.9, shoe pad 15 mm n 3, push-off 0.6 / 0.8, trunk 500 / 60 and law scale"
+        said = ["its own bell a_min 0.9, shoe pad 15 mm n 3, push-off 0.6 / 0.8 weights 1 / -0.1 / 0.3 at gain 0.5, "
+                "trunk 500 / 60, energy-keeping flight landing along the prescribed direction, and law scale"
                 + ("" if args.surface == "rigid" else " (calibrated on the rigid plate)")]
         said += [f"bell a_min {args.bell}"] * (args.bell is not None) + [said_law] * (args.law_scale != "none")
     if args.bell is not None:

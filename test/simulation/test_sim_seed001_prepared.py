@@ -74,27 +74,41 @@ def test_prepared_law_repeats_the_expected_stance_and_softens_the_unexpected_one
 
 
 @pytest.mark.parametrize("freq, factor, leg, extra, joint", [
-    (2.2, 1.876, -0.134, (0.065, 0.034, 0.008), (-0.078, -0.042, -0.041)),
-    (1.53, 1.164, -0.054, (0.044, 0.024, 0.011), (-0.030, -0.027, 0.003)),
+    (2.2, 1.872, -0.135, (0.065, 0.034, 0.008), (-0.079, -0.042, -0.039)),
+    (1.53, 1.133, -0.057, (0.064, -0.001, -0.013), (-0.030, -0.015, 0.111)),
 ])
-def test_seed_like_preset_reproduces_seed_001(freq, factor, leg, extra, joint):
-    """The bundled recordings' preset, prepared for the soft surface, on seed 001's unexpected hard surface: every
-    direction holds (leg stiffness falls, ankle and knee flex more, the hip less, joint stiffness to midstance falls
-    most at the ankle), with a 2.2 Hz hop on the soft law (none without the anticipation: closest 437 ms stance)."""
+def test_seed_like_preset_on_seed_001s_unexpected_hard_surface(freq, factor, leg, extra, joint):
+    """The bundled recordings' preset, prepared for the soft surface, on seed 001's unexpected hard surface (session
+    32's preset, energy-keeping flight; measured 2026-11-30): leg stiffness falls, the ankle flexes more and the hip
+    less, joint stiffness to midstance falls most at the ankle; at 2.2 Hz the knee flexes more too, at 1.53 Hz it sits
+    on its sign (-0.001 rad; the prescribed-flight preset of sessions 14-31 had +0.024): the one seed 001 direction the
+    preset misses (test below)."""
     s = unexpected_hard_vs_soft(freq, **seed_like_hopper_options())
     assert s.stiffening == pytest.approx(factor, abs=0.005)
     assert s.leg_change == pytest.approx(leg, abs=0.005)
     np.testing.assert_allclose(s.extra_flexion_rad, extra, atol=0.003)
     np.testing.assert_allclose(s.joint_change, joint, atol=0.003)
-    assert all(s.directions().values())
+    directions = s.directions()
+    assert directions["leg stiffness falls"] and directions["joint stiffness falls most at the ankle"]
+    assert s.extra_flexion_rad[0] > 0.05 and s.extra_flexion_rad[2] < 0.01
     assert s.hard.duration_s < s.soft.duration_s
 
 
-def test_without_the_anticipation_the_preset_has_no_2_2_hz_hop_on_seed_001s_soft_law():
-    """Sessions 12-19's figure: the law prepared for the hard plate, put on the soft law unchanged, keeps the foot down
-    for 437 ms of the 455 ms period."""
-    with pytest.raises(ValueError, match=r"closest: stance 43\d ms"):
-        unexpected_hard_vs_soft(2.2, anticipate=False, **seed_like_hopper_options())
+@pytest.mark.xfail(strict=True, reason="issue 17, open: at 1.53 Hz the preset's knee flexes 0.001 rad less on the "
+                                       "unexpected hard surface (session 32's energy-keeping preset)")
+def test_seed_001_knee_flexes_more_on_the_unexpected_hard_surface_at_1p53_hz():
+    """Seed 001: on the unexpected hard surface the ankle and knee flex more and the hip less, at every frequency."""
+    assert unexpected_hard_vs_soft(1.53, **seed_like_hopper_options()).directions()["ankle and knee flex more, the hip less"]
+
+
+def test_without_the_anticipation_the_preset_barely_leaves_seed_001s_soft_law_at_2_2_hz():
+    """The law prepared for the hard plate, put on the soft law unchanged, keeps the foot down for 427 ms of the
+    455 ms period (session 32's preset; sessions 12-31's found no hop at all, closest 437 ms): a stance that fills
+    94 % of the cycle, nothing like a hop, hence the anticipation."""
+    s = unexpected_hard_vs_soft(2.2, anticipate=False, **seed_like_hopper_options())
+    assert s.stiffening == 1.0
+    assert s.soft.duration_s == pytest.approx(0.427, abs=0.003)
+    assert s.soft.duration_s > 0.9 / 2.2
 
 
 def test_prepared_for_hard_the_unexpected_soft_surface_has_the_opposite_effects():
