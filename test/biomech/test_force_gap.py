@@ -53,13 +53,18 @@ def test_gap_stance_rejected_as_message_loss_others_unchanged(rec, clean):
     assert len(accepted) == len(outside) == 7
     first_after = min(i for i, c in enumerate(outside) if c.touchdown_s > start)
     for i, (s, c) in enumerate(zip(accepted, outside)):
-        # the first stance after the gap has a shorter flight for its baseline: on the shoe pad of session 14's
-        # recording, whose force crosses the detector's 16 N level at ~3 N/ms, its events move by +2.4 / -4.3 us
-        # (this test's figures); every other stance's to 1e-6 s
-        tol = 1e-5 if i == first_after else 1e-6
-        assert abs(s.touchdown_s - c.touchdown_s) < tol and abs(s.takeoff_s - c.takeoff_s) < tol
+        # the first stance after the gap has another flight for its baseline: the gap ends 7 ms after the take-off
+        # before it, inside the 20 ms of plate ringing (settle_s) the clean run leaves out, but the detector starts
+        # afresh after a gap and averages those samples in (2.9-3.8 N): its baseline is 0.126 N, not 0.063 N. That
+        # +0.063 N raises the detector's 16 N crossing level on both edges, so the touchdown comes later and the
+        # take-off earlier, each by 0.063 N over the force's slope there (20.7 N/ms rising, 3.8 N/ms falling on the
+        # d8eda79 recording): +3.0 / -16.5 us (this test's figures); every other stance's events to 1e-6 s
+        if i == first_after:
+            assert 0 < s.touchdown_s - c.touchdown_s < 1e-5 and -2.5e-5 < s.takeoff_s - c.takeoff_s < 0
+        else:
+            assert abs(s.touchdown_s - c.touchdown_s) < 1e-6 and abs(s.takeoff_s - c.takeoff_s) < 1e-6
         peak = np.max(np.abs(c.joints.moment_nm), axis=0)
-        # the first stance after the gap has a shorter flight for its baseline and filter start: 0.02 N m
+        # the first stance after the gap has another baseline and filter start: up to 0.03 N m (4e-4 of the peak)
         assert np.all(np.max(np.abs(s.joints.moment_nm - c.joints.moment_nm), axis=0) < 1e-3 * peak)
 
 

@@ -85,7 +85,7 @@ def test_short_window_hip_fit_leaves_the_takeoff_out(recording):
     whole = analyze_recording(recording)
     options = default_fit_options(short.options)
     cut = replace(options, exclude_takeoff_s=SHORT_WINDOW_HIP_EXCLUSION_S)
-    compared = 0
+    compared = lost = 0
     for s, w in zip(short.stances, whole.stances):
         if s.joints is None or w.joints is None:
             continue
@@ -93,12 +93,25 @@ def test_short_window_hip_fit_leaves_the_takeoff_out(recording):
         fits, whole_fits = fit_stance_joints(s, options), fit_stance_joints(w, options)
         assert fits["hip"].coefficients == fit_stance_joints(s, cut, joints=("hip",))["hip"].coefficients
         with_takeoff = fit_stance_joints(replace(s, data_after_takeoff_s=None), options)
-        assert fits["hip"].coefficients["k0"] != pytest.approx(with_takeoff["hip"].coefficients["k0"], rel=1e-6)
+        hip, hip_with = fits["hip"], with_takeoff["hip"]
+        assert hip.status == "solved" and "k0" in hip.coefficients
+        if hip_with.status == "solved":  # the last 20 ms move k0 (by 1-40 % on the d8eda79 recording) or the terms kept
+            assert _coefficients_differ(hip.coefficients, hip_with.coefficients)
+        else:
+            # with the last 20 ms (continued markers) stance 2 of the d8eda79 recording keeps no significant hip
+            # stiffness at all; without them its k0 is 564 N m/rad, the whole-record stance's 532 N m/rad
+            assert "kept no stiffness term" in hip_with.rejection_reason
+            lost += 1
         for joint in ("ankle", "knee"):
             assert fits[joint].coefficients == with_takeoff[joint].coefficients
         assert whole_fits["hip"].coefficients != fit_stance_joints(w, cut, joints=("hip",))["hip"].coefficients
         compared += 1
-    assert compared >= 8
+    assert compared >= 8 and lost <= 1
+
+
+def _coefficients_differ(a: dict[str, float], b: dict[str, float]) -> bool:
+    """Other terms kept, or a shared one more than round-off apart."""
+    return a.keys() != b.keys() or any(a[k] != pytest.approx(b[k], rel=1e-6) for k in a)
 
 
 def _moment_errors(recording, treated: bool) -> np.ndarray:

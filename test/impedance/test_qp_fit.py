@@ -7,7 +7,7 @@ import pytest
 
 from hop_impedance.impedance.constraints import constraint_rows, constraint_violations
 from hop_impedance.impedance.cross_check import fit_by_slsqp
-from hop_impedance.impedance.qp_fit import ConstrainedLeastSquares
+from hop_impedance.impedance.qp_fit import UNPOLISHED, ConstrainedLeastSquares
 from hop_impedance.impedance.regression_model import TERM_NAMES, parameter_indices, stance_regressors
 from hop_impedance.impedance.synthetic import synthetic_stance
 
@@ -231,12 +231,17 @@ def test_full_row_fallback_prints_nothing_and_is_optimal(capfd, freq, seed, join
 
 
 def test_a_degenerate_working_set_is_solved_there_not_on_all_rows(monkeypatch):
-    """Session 14: on recordings/sim_2p20hz_hard with the live stage's 5 ms window, stance 2's knee has a QP whose
-    optimum has ~half of its 1051 rows active (the damping terms at 0); OSQP's polishing fails on the working set,
+    """Session 14: on recordings/sim_2p20hz_hard with the live stage's 5 ms window, stance 2's knee had a QP whose
+    optimum had ~half of its 1051 rows active (the damping terms at 0); OSQP's polishing fails on the working set,
     and the all-rows fallback took 40,575 iterations (0.4 s, the short-window modes' p99) and ended 2.8e-7
     infeasible with a KKT residual of 2.9e-4 (`bench/qp_fallback.py`). Now the working set's converged ADMM
     iterate is kept (``qp_fit.UNPOLISHED``): every fit of that stance stays on the working set and passes the
-    independent certificate of test_working_set_solution_satisfies_kkt_on_every_row."""
+    independent certificate of test_working_set_solution_satisfies_kkt_on_every_row.
+
+    The d8eda79 recording (issue 17's preset) has the case at stance 1's ankle instead: its QP in m0, k0, k1, b0,
+    b1 has 529 of 1055 rows active at the optimum (B >= 0 and P_d <= 0 at every sample: b0 = b1 = 0), the
+    8-row working set's round ends unpolished, and the kept iterate is feasible to 1e-16 with a KKT residual
+    of 3e-16 (measured; stance 2's knee now keeps k0, k1 with 1 of its 525 rows active)."""
     import dataclasses
     from pathlib import Path
 
@@ -248,16 +253,22 @@ def test_a_degenerate_working_set_is_solved_there_not_on_all_rows(monkeypatch):
 
     path = Path(__file__).resolve().parents[2] / "recordings" / "sim_2p20hz_hard.mcap"
     analysis = analyze_recording(load_recording(path), dataclasses.replace(AnalysisOptions(), post_takeoff_s=0.005))
-    solved = []
-    solve = ConstrainedLeastSquares.solve
+    solved, rounds = [], []
+    solve, solve_rows = ConstrainedLeastSquares.solve, ConstrainedLeastSquares._solve_rows
 
     def recorded(self, design, target, constraints):
         out = solve(self, design, target, constraints)
         solved.append((design, target, constraints, out))
         return out
 
+    def rows_recorded(self, *args):
+        out = solve_rows(self, *args)
+        rounds.append(out[0])
+        return out
+
     monkeypatch.setattr(ConstrainedLeastSquares, "solve", recorded)  # the real solver, its calls recorded
-    fit_stance_joints(analysis.stances[2], None, {}, joints=("knee",))
+    monkeypatch.setattr(ConstrainedLeastSquares, "_solve_rows", rows_recorded)
+    fit_stance_joints(analysis.stances[1], None, {}, joints=("ankle",))
     degenerate = 0
     for X, tau, A, sol in solved:
         assert sol.converged and sol.working_rows != -1, sol.status  # never the all-rows fallback
@@ -270,7 +281,8 @@ def test_a_degenerate_working_set_is_solved_there_not_on_all_rows(monkeypatch):
             _, residual = nnls(rows[active].T, Xs.T @ (Xs @ x - ys))
             assert residual <= 1e-8 * np.linalg.norm(Xs.T @ ys)
         degenerate += active.size > A.shape[0] // 4
-    assert degenerate >= 1  # the case is still in the recording (528 of 1051 rows active, measured)
+    assert degenerate >= 1  # the case is still in the recording (529 of 1055 rows active, measured)
+    assert UNPOLISHED in rounds  # and its working-set round is the one polishing fails on, kept
 
 
 @pytest.mark.parametrize("joint,freq,seed", [("ankle", 2.20, 1), ("knee", 1.53, 3), ("hip", 2.20, 0)])
