@@ -20,9 +20,10 @@ quantity the analysis uses depends on it.
   the joint springs give back in flight, along the
   time-reversed take-off rates (:func:`flight_segment_rates`); with the COM
   ballistic, kinetic + gravitational + stored elastic energy at touchdown equals
-  that at take-off (test/simulation/test_sim_flight_energy.py). Not yet the
-  default. With lossless laws and no push-off, what the hop gains or loses is
-  then the work of a non-conservative part: the trunk balance's
+  that at take-off (test/simulation/test_sim_flight_energy.py). Not the
+  library's default; the seed-like preset's flight since session 32
+  (scenarios.SEED_LIKE_HOPPER_FLIGHT, landing ``"prescribed"``). With lossless
+  laws and no push-off, what the hop gains or loses is then the work of a non-conservative part: the trunk balance's
   (:class:`~hop_impedance.simulation.impedance_laws.TrunkBalance`, a moment on
   the trunk's absolute pitch acting at the hip). With a hip spring in its place
   the energy at touchdown stays the same to 3e-8 over 30 hops and the hop keeps

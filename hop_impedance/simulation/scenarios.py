@@ -190,11 +190,14 @@ def seed_like_hopper_options(subject: Subject = SEED_SUBJECT) -> dict:
     :func:`seed_like_options` (toe-tip contact, flexed touchdown posture, late push-off, bell activation) with the
     bell's floor at :data:`SEED_LIKE_HOPPER_BELL_MIN`, a shoe pad in series with the surface (:func:`shoe_pad`,
     :data:`SEED_LIKE_HOPPER_PAD`: 15 mm at 3 BW, n 3; the seed's subjects hopped in shoes on a force plate), the
-    push-off lasting to take-off (:data:`SEED_LIKE_HOPPER_PUSH_TIMING`), the trunk balance 500 / 60
-    (:data:`SEED_LIKE_HOPPER_TRUNK`) and the law Table 2 x :data:`SEED_LIKE_HOPPER_LAW_SCALE`. Meant for the rigid
-    plate (:data:`SEED_LIKE_HOPPER_SURFACE`), on which its law was calibrated. Measured against the seed
-    (docs/simulator.md, sessions 12-14): 3 binding Table 1 cells out (the hip excursion), fitted ankle/knee k0, k1
-    within 9 % of Table 2, k1 kept in 10 / 10 stances. ``hop-impedance simulate --hopper seed-like`` uses it.
+    push-off lasting to take-off (:data:`SEED_LIKE_HOPPER_PUSH_TIMING`) with its shares
+    (:data:`SEED_LIKE_HOPPER_PUSH_WEIGHTS`) and half-gain control (:data:`SEED_LIKE_HOPPER_PUSH_OFF_GAIN`), the trunk
+    balance 500 / 60 (:data:`SEED_LIKE_HOPPER_TRUNK`), the energy-keeping flight (:data:`SEED_LIKE_HOPPER_FLIGHT`,
+    since session 32) and the law Table 2 x :data:`SEED_LIKE_HOPPER_LAW_SCALE`. Meant for the rigid plate
+    (:data:`SEED_LIKE_HOPPER_SURFACE`), on which its law was calibrated. Measured against the seed (docs/simulator.md,
+    session 32): 3 binding Table 1 cells out, each with its cause (the hip excursion at 1.87 / 2.2 Hz, the 1.53 Hz
+    knee's maximal moment), fitted ankle/knee k0, k1 within 8 % of Table 2, k1 kept in 10 / 10 stances, 20 of issue
+    17's 24 rows. ``hop-impedance simulate --hopper seed-like`` uses it.
     """
     mm, exponent = SEED_LIKE_HOPPER_PAD
     return {**seed_like_options(subject), "bell_activation_min": SEED_LIKE_HOPPER_BELL_MIN,
