@@ -129,7 +129,9 @@ def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
         checked = 0
         for j, joint in enumerate(JOINT_NAMES):
             valid_idx = [f.stance_index for f in sent if f.valid[j]][-POOL:]
-            assert len(valid_idx) >= 2, (joint, [f.invalid_reason[j] for f in sent])
+            # the hip: 1 valid of the first 6 on session 32's recording (stance 4; the others read a negative damping
+            # or R^2 < 0.5: the trunk balance's moment, recordings/README.md), so its pool is that one stance
+            assert len(valid_idx) >= (2 if joint != "hip" else 1), (joint, [f.invalid_reason[j] for f in sent])
             assert last.pooled_n_stances[j] == len(valid_idx)
             for term, value_field, se_field in (("k0", "pooled_k0_nm_per_rad", "pooled_k0_std_error"),
                                                 ("k1", "pooled_k1_nm_per_rad2", "pooled_k1_std_error"),
@@ -148,7 +150,8 @@ def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
                 assert getattr(last, se_field)[j] == pytest.approx(se, rel=1e-12)
                 chi2_feed = getattr(last, f"pooled_{term}_chi2_per_dof")[j]
                 assert chi2_feed == pytest.approx(chi2, rel=1e-9) if len(pairs) > 1 else math.isnan(chi2_feed)
-                assert se < min(s for _, s in pairs)  # pooling narrows the interval
+                # pooling narrows the interval; one stance's pool is that stance
+                assert se < min(s for _, s in pairs) if len(pairs) > 1 else se == pytest.approx(pairs[0][1], rel=1e-12)
                 checked += 1
             if last.valid[j]:  # the latest stance's own SEs are its fit's
                 p = fits[(last.stance_index, joint)]
@@ -206,8 +209,10 @@ def test_feed_pools_expires_and_invalidates_on_subject_change(stances):
         assert spin_until(lambda: feeds[-1][1].subject_id == "heavier")
         other = send(msgs[9])
         assert not any(other.valid)
+        # ankle and knee refused for the mass; stance 9's hip keeps its own reason (session 32's recording: b_eq -3.18)
         assert all(r.startswith("stance analysed for body mass 54.8 kg, /subject 'heavier' has 64.8 kg")
-                   for r in other.invalid_reason)
+                   for r in other.invalid_reason[:2]), other.invalid_reason
+        assert other.invalid_reason[2].startswith("implausible: b_eq -3.18"), other.invalid_reason
         # the fits themselves were accepted: the feed, not the fit, refused them
         assert all(p.accepted for p in profiles if p.stance_index in (6, 8, 9))
         # nothing published after the first change carried a valid value of the first subject

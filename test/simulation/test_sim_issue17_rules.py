@@ -117,9 +117,10 @@ def test_bell_row_reads_issue_17s_share_of_stances(issue17):
 
 
 def test_flight_flag_sets_the_flight_model(issue17):
-    """``--flight energy_keeping`` (session 20's experiment) changes only the preset's flight model."""
+    """``--flight prescribed`` (the preset's flight of sessions 14-31) changes only the preset's flight model, which is
+    the energy-keeping one since session 32."""
     base, _ = issue17.variant_options(issue17.VariantArgs(hopper="seed-like", law_scale="none", surface="rigid"))
     options, said = issue17.variant_options(issue17.VariantArgs(hopper="seed-like", law_scale="none", surface="rigid",
-                                                                flight="energy_keeping"))
-    assert "flight" not in base and options["flight"] == "energy_keeping" and said.endswith("flight energy_keeping")
-    assert {k: v for k, v in options.items() if k != "flight"}.keys() == base.keys()
+                                                                flight="prescribed"))
+    assert base["flight"] == "energy_keeping" and options["flight"] == "prescribed" and said.endswith("flight prescribed")
+    assert {k: v for k, v in options.items() if k != "flight"} == {k: v for k, v in base.items() if k != "flight"}
