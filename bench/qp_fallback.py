@@ -2,8 +2,9 @@
 
 Session 14 found the short-window modes' p99 on recordings/sim_2p20hz_hard.mcap in one fit: after publishing a
 stance's feed, ``impedance_estimator`` runs that stance's own per-stance fits (``fit_stance_joints``, the
-diagnostics and F-tests beside the feed), and on a short window one of them (stance 2's knee, full five-term
-model) leaves the working set (``qp_fit`` module docstring) for :meth:`ConstrainedLeastSquares.solve_all_rows`.
+diagnostics and F-tests beside the feed), and on a short window one of them (then stance 2's knee, full five-term
+model; on session 32's recording the degenerate working set is stance 1's ankle, kept on it) leaves the
+working set (``qp_fit`` module docstring) for :meth:`ConstrainedLeastSquares.solve_all_rows`.
 This bench analyses the recording the way the live stage does (``AnalysisOptions.post_takeoff_s``), times every
 per-stance fit, and for each fit that fell back prints why (each working-set round's rows and OSQP status), the
 all-rows solve's iterations and the number of constraint rows active at its solution. Nothing is changed.

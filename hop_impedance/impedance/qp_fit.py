@@ -38,7 +38,8 @@ fails but ADMM converged at every stage down to ``eps`` (:data:`UNPOLISHED`): th
 iterate is then the working-set QP's optimum to ``eps``, which is all the loop
 needs, and step 3 still checks every row. Polishing fails where the optimum has
 many nearly dependent active rows: on recordings/sim_2p20hz_hard's 5 ms live
-window, stance 2's knee (damping terms at 0) has 528 of its 1051 rows active.
+window, stance 1's ankle (damping terms at 0) has 529 of its 1055 rows active
+(session 32's recording; session 14's: stance 2's knee, 528 of 1051).
 Before session 14 such a round sent the fit to the all-rows solve, which took
 40,575 iterations (0.4 s, the live short-window p99) and ended 2.8e-7
 infeasible with a KKT residual of 2.9e-4; kept on the working set it is
