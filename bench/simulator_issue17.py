@@ -201,6 +201,7 @@ class FrequencyMeasure:
     table3: dict  # joint -> (mean variable, mean constant) Table 3 metric
     k_initial_max: dict  # joint -> (mean initial K, mean maximal K)
     bell_failures: dict = field(default_factory=dict)  # joint -> text per stance whose K(t) is not a bell (edges > 0)
+    energy: dict = field(default_factory=dict)  # the truth's per-hop budget: flight_rel, push_off_j (mean, min, max)
 
 
 def measure_frequency(freq_hz: float, options: dict, hops: int = 10, seed: int = 1,
@@ -224,7 +225,36 @@ def measure_frequency(freq_hz: float, options: dict, hops: int = 10, seed: int =
               for j in JOINTS}
     k_initial_max = {j: (float(np.mean([f[j].initial_stiffness for f in fits])),
                          float(np.mean([f[j].max_stiffness for f in fits]))) for j in JOINTS}
-    return FrequencyMeasure(realism, k1_kept, median_k0_k1(fits), bell, table3, k_initial_max, bell_failures)
+    return FrequencyMeasure(realism, k1_kept, median_k0_k1(fits), bell, table3, k_initial_max, bell_failures,
+                            flight_energy(truth))
+
+
+def flight_energy(truth: dict) -> dict:
+    """Issue 17's flight criterion from the truth's per-stance budgets (``energy_j``): the largest energy the flight after
+    a stance gains or discards relative to the take-off's (``flight_rel``; 0 when it keeps it) and the push-off's work
+    per hop (J: mean, min, max)."""
+    budgets = [s["energy_j"] for s in truth["stances"]]
+    flights = [abs(b["flight_j"]) / abs(b["e_takeoff_j"]) for b in budgets if b.get("flight_j") is not None]
+    push = [b["push_off_j"] for b in budgets if b.get("push_off_j") is not None]
+    return {"flight_rel": max(flights, default=float("nan")),
+            "push_off_j": (float(np.mean(push)), min(push), max(push)) if push else None}
+
+
+#: Issue 17: "with no push-off or loss in flight, energy at touchdown equals energy at the previous take-off within 1e-6
+#: relative"; the row asks it of the hopper's own flight (the push-off then replaces only the stance's losses).
+FLIGHT_ENERGY_TOLERANCE = 1e-6
+
+
+def energy_rows(measures: dict) -> list[Row]:
+    """The flight keeps the energy (issue 17), with the push-off's work per hop that then replaces the losses."""
+    parts = []
+    for f, m in measures.items():
+        push = m.energy.get("push_off_j")
+        parts.append(f"{f:g} Hz {m.energy.get('flight_rel', float('nan')):.1e}"
+                     + (f" (push-off {push[0]:.1f} J, {push[1]:.1f}-{push[2]:.1f})" if push else ""))
+    worst = max((m.energy.get("flight_rel", float("nan")) for m in measures.values()), default=float("nan"))
+    return [Row("flight keeps the energy: largest change in flight / E at take-off (push-off per hop)", ", ".join(parts),
+                f"<= {FLIGHT_ENERGY_TOLERANCE:g}", bool(worst <= FLIGHT_ENERGY_TOLERANCE))]
 
 
 def bell_shape_failure(stiffness: np.ndarray, edge_floor: float = BELL_EDGE_FLOOR) -> str:
@@ -361,7 +391,7 @@ def criteria(options: dict, hops: int = 10, seed: int = 1, surface: str = "hard"
     measures = {f: measure_frequency(f, options, hops, seed, surface) for f in freqs}
     realism, _ = realism_rows(measures)
     seed001_part = seed001_rows(options, freqs, seed001_keep_pad) if seed001 else []
-    return realism + fit_rows(measures) + seed001_part, measures
+    return realism + energy_rows(measures) + fit_rows(measures) + seed001_part, measures
 
 
 def force_shape(measures: dict) -> str:

@@ -124,3 +124,23 @@ def test_flight_flag_sets_the_flight_model(issue17):
                                                                 flight="prescribed"))
     assert base["flight"] == "energy_keeping" and options["flight"] == "prescribed" and said.endswith("flight prescribed")
     assert {k: v for k, v in options.items() if k != "flight"} == {k: v for k, v in base.items() if k != "flight"}
+
+
+def test_the_flight_row_reads_the_truths_energy_budget(issue17):
+    """Issue 17's flight criterion from a truth file's per-stance budgets: the bundled 2.2 Hz recording (session 32's
+    preset, energy-keeping flight) keeps the energy in flight to round-off (|flight_j| at most 2.3e-13 J of about
+    570 J) and its push-off does 9.2 J per hop (6.5-11.0); a flight that discards 1 J of 570 fails the row."""
+    from pathlib import Path
+
+    from hop_impedance.simulation.truth import load_truth
+
+    truth = load_truth(Path(__file__).resolve().parents[2] / "recordings" / "sim_2p20hz_hard.truth.json")
+    energy = issue17.flight_energy(truth)
+    assert energy["flight_rel"] < 1e-15
+    assert energy["push_off_j"] == pytest.approx((9.22, 6.5, 11.0), abs=0.05)
+    measures = {2.2: issue17.FrequencyMeasure({}, {}, None, {}, {}, {}, {}, energy)}
+    assert issue17.energy_rows(measures)[0].passed
+    lossy = {**truth, "stances": [{**s, "energy_j": {**s["energy_j"], "flight_j": -1.0}} for s in truth["stances"]]}
+    measures = {2.2: issue17.FrequencyMeasure({}, {}, None, {}, {}, {}, {}, issue17.flight_energy(lossy))}
+    row = issue17.energy_rows(measures)[0]
+    assert not row.passed and row.measured.startswith("2.2 Hz 1.8e-03")
