@@ -196,8 +196,8 @@ def seed_like_hopper_options(subject: Subject = SEED_SUBJECT) -> dict:
     since session 32) and the law Table 2 x :data:`SEED_LIKE_HOPPER_LAW_SCALE`. Meant for the rigid plate
     (:data:`SEED_LIKE_HOPPER_SURFACE`), on which its law was calibrated. Measured against the seed (docs/simulator.md,
     session 32): 3 binding Table 1 cells out, each with its cause (the hip excursion at 1.87 / 2.2 Hz, the 1.53 Hz
-    knee's maximal moment), fitted ankle/knee k0, k1 within 8 % of Table 2, k1 kept in 10 / 10 stances, 20 of issue
-    17's 24 rows. ``hop-impedance simulate --hopper seed-like`` uses it.
+    knee's maximal moment), fitted ankle/knee k0, k1 within 8 % of Table 2, k1 kept in 10 / 10 stances, 21 of
+    bench/simulator_issue17.py's 25 rows. ``hop-impedance simulate --hopper seed-like`` uses it.
     """
     mm, exponent = SEED_LIKE_HOPPER_PAD
     return {**seed_like_options(subject), "bell_activation_min": SEED_LIKE_HOPPER_BELL_MIN,
@@ -393,8 +393,9 @@ def lossless_hopper_config(freq_hz: float, n_hops: int, options: dict, surface_n
     Everything that does work on the hopper or takes it is removed, the rest kept: no push-off, no damping (b0 = 0),
     no bell activation (a stiffness that changes with time does work: the Eq. 3 springs at a(t) = 1, Table 2 x the
     options' ``law_scale``), the surface without its damper (an elastic shoe pad kept, :func:`~hop_impedance.
-    simulation.ground.lossless`), no sliding (friction None), the energy-keeping flight, no noise. ``trunk``
-    "hip_spring" (default) holds the trunk by a hip spring of the options' trunk balance's stiffness about the
+    simulation.ground.lossless`), no sliding (friction None), the energy-keeping flight with its own landing rule (the
+    take-off rates reversed, or a stored hop's rates; the options' ``flight`` and ``landing`` are dropped), no noise.
+    ``trunk`` "hip_spring" (default) holds the trunk by a hip spring of the options' trunk balance's stiffness about the
     touchdown hip angle (added to the hip's k0; ``hip_trunk_spring_nm_rad``), "balance" keeps the balance moment (on
     the trunk's absolute pitch: no potential, :data:`HIP_TRUNK_SPRING_NM_RAD`).
     """
