@@ -512,7 +512,7 @@ def main() -> None:
     parser.add_argument("--write", action="store_true",
                         help="write docs/simulator_realism.md and the seed table between the README's markers")
     parser.add_argument("--trunk", action="store_true", help="with the trunk-balance moment (scenarios.TRUNK_BALANCE)")
-    parser.add_argument("--flight", default="prescribed", choices=("prescribed", "energy_keeping", "trunk_held"))
+    parser.add_argument("--flight", default="prescribed", choices=("prescribed", "energy_keeping", "trunk_held", "trunk_still"))
     parser.add_argument("--posture", default=None,
                         help="touchdown ankle rho1, knee flexion, hip flexion (rad), e.g. 1.6,0.8,0.5; "
                              "default scenarios.DEFAULT_TOUCHDOWN_RHO")

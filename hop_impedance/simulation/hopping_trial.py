@@ -39,6 +39,13 @@ quantity the analysis uses depends on it.
   hop (``HoppingTrial.flight_balance_loss_j``; the energy budget's
   ``flight_balance_loss_j``), so energy at touchdown = energy at take-off - that
   loss exactly. The calibration's rounds use the same flight.
+- ``"trunk_still"`` (session 32, off by default): the energy-keeping flight landing
+  the trunk without pitching as ``"trunk_held"`` does, but with nothing taken out:
+  the legs carry all of the carried energy (:func:`touchdown_segment_rates` with the
+  trunk held), so energy at touchdown = energy at take-off as for
+  ``"energy_keeping"``; only the landing motion's direction differs (the trunk's
+  part of it moved to the legs). Measured as a seed-like preset in docs/simulator.md,
+  "Session 32".
 
 Touchdown and hop sequencing
 ----------------------------
@@ -102,9 +109,12 @@ from hop_impedance.simulation.stance import (
 #: A contact shorter than this is a bounce of the foot, not a hop (s).
 MIN_HOP_STANCE_S = 0.05
 #: Flight models of :class:`HoppingConfig` (module docstring).
-FLIGHT_MODELS = ("prescribed", "energy_keeping", "trunk_held")
+FLIGHT_MODELS = ("prescribed", "energy_keeping", "trunk_held", "trunk_still")
 #: The flight models whose touchdown rates carry the take-off's segment energy (all of it, or less the trunk's share).
-ENERGY_KEEPING_FLIGHTS = ("energy_keeping", "trunk_held")
+ENERGY_KEEPING_FLIGHTS = ("energy_keeping", "trunk_held", "trunk_still")
+#: The flights that land the trunk without pitching (zero absolute trunk rate at every touchdown, the calibrated one's
+#: rates moved to the trial's posture through the legs only, :func:`trunk_held_toe_correction`).
+TRUNK_AT_REST_FLIGHTS = ("trunk_held", "trunk_still")
 #: Landing directions of the energy-keeping flight (:attr:`HoppingConfig.landing`).
 LANDINGS = ("reversed", "prescribed")
 
@@ -187,12 +197,13 @@ class HoppingConfig:
         Coulomb friction of the sole (stance.py docstring); None = never slides.
     trunk_balance : TrunkBalance or None
         Postural moment at the hip holding the trunk at its touchdown inclination.
-    flight : {"prescribed", "energy_keeping", "trunk_held"}
+    flight : {"prescribed", "energy_keeping", "trunk_held", "trunk_still"}
         ``"prescribed"``: segments brought to rest at the next touchdown (the energy of segment
         motion at take-off is discarded). ``"energy_keeping"``: the touchdown segment rates carry
         that energy (:func:`flight_segment_rates`); module docstring. ``"trunk_held"``: the same with the
         trunk balance holding the trunk in flight (:func:`trunk_held_segment_rates`): zero absolute trunk rate
         at touchdown, the trunk's share of the landing motion an explicit flight loss (module docstring).
+        ``"trunk_still"``: zero absolute trunk rate at touchdown with all of the carried energy in the legs.
     landing_rates_rad_s : 4 floats or None
         Energy-keeping flight only: land along these segment rates (rad/s; their direction, the
         magnitude carries the flight's energy) instead of the take-off rates reversed: a practised
@@ -605,13 +616,17 @@ def trunk_held_toe_correction(chain: Chain, q: np.ndarray, com_vx_m_s: float, ra
 def flight_rates(chain: Chain, config: HoppingConfig, law: ImpedanceLaw, stance: StanceSimulation,
                  q_next: np.ndarray, com_vx_m_s: float, direction=None) -> tuple[np.ndarray, float, float]:
     """(touchdown rates rad/s, balance loss J, energy not placed J) of ``config.flight``'s energy-keeping flights:
-    :func:`flight_segment_rates` (``"energy_keeping"``, loss 0) or the same carried energy landed with the trunk
-    held (``"trunk_held"``, :func:`trunk_held_segment_rates`), along ``direction`` (None: the take-off rates
-    reversed)."""
-    if config.flight != "trunk_held":
+    :func:`flight_segment_rates` (``"energy_keeping"``, loss 0), the same carried energy landed with the trunk
+    held (``"trunk_held"``, :func:`trunk_held_segment_rates`, the trunk's share lost) or landed with the trunk at rest
+    and all of it in the legs (``"trunk_still"``: :func:`touchdown_segment_rates` with the trunk held, loss 0), along
+    ``direction`` (None: the take-off rates reversed)."""
+    if config.flight not in TRUNK_AT_REST_FLIGHTS:
         rates, _, not_placed = flight_segment_rates(chain, law, stance, q_next, com_vx_m_s, direction)
         return rates, 0.0, not_placed
     carried, d = _carried_flight_energy(chain, law, stance, q_next, direction)
+    if config.flight == "trunk_still":
+        rates, not_placed = touchdown_segment_rates(chain, q_next, com_vx_m_s, d, carried, held=TRUNK_SEGMENT)
+        return rates, 0.0, not_placed
     return trunk_held_segment_rates(chain, q_next, com_vx_m_s, d, carried)
 
 
@@ -716,7 +731,7 @@ class _CalibrationHop:
         """
         config, period = self.config, 1.0 / self.config.freq_hz
         law = scale_push_off(config.law, scale)
-        if config.flight == "trunk_held" and rates is not None:
+        if config.flight in TRUNK_AT_REST_FLIGHTS and rates is not None:
             rates = trunk_held_toe_correction(self.chain, q, 0.0, rates)
         td = touchdown_state(self.chain, q, np.array([0.0, -speed]), 0.0, rates)
         st = simulate_stance(self.chain, law, config.surface, td, t_max_s=2.0 * period,
@@ -874,7 +889,7 @@ def simulate_hopping(chain: Chain, config: HoppingConfig, seed: int = 0, posture
         speed, vx_com, ahead, *first_rates = (float(v) for v in config.first_touchdown)
         q_td, rates = touchdown_posture(chain, rho_nom, ahead), np.array(first_rates)
         flights = [_lead_in_flight(chain, config, q_td, rates, speed, vx_com)]
-    elif config.flight == "trunk_held":  # the calibration's rates moved to the trial's posture, the trunk at rest
+    elif config.flight in TRUNK_AT_REST_FLIGHTS:  # the calibration's rates moved to the trial's posture, the trunk at rest
         rates = trunk_held_toe_correction(chain, q_td, vx_com, td_rates)
     stop = ""
     t_td = t_end = config.lead_in_s

@@ -129,7 +129,9 @@ def _flight_model(cfg) -> str:
             "plus the springs' returned energy; force plate zero"
             + ("; landing along the prescribed flight's landing motion" if cfg.landing == "prescribed" else "")
             + ("; the trunk balance holds the trunk in flight (zero trunk pitch rate at touchdown, the trunk's share of "
-               "the landing motion lost: stances' energy_j.flight_balance_loss_j)" if cfg.flight == "trunk_held" else ""))
+               "the landing motion lost: stances' energy_j.flight_balance_loss_j)" if cfg.flight == "trunk_held" else "")
+            + ("; the trunk lands without pitching, all of the carried energy in the legs" if cfg.flight == "trunk_still"
+               else ""))
 
 
 def trial_truth(

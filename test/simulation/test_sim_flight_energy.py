@@ -237,3 +237,31 @@ def test_trunk_held_flight_loses_exactly_the_reported_balance_loss():
         assert internal_kinetic_energy_j(chain, nxt.touchdown.g[2:], nxt.touchdown.gd[2:]) > 0.1  # the legs carry some
         assert loss > 1e-3 and row["flight_balance_loss_j"] == loss and "push_off_j" in row
     assert abs(tr.stances[0].touchdown.gd[5]) < 1e-12
+
+
+def test_trunk_still_flight_lands_the_trunk_at_rest_and_keeps_all_the_energy():
+    """``flight="trunk_still"`` (session 32): zero absolute trunk rate at every touchdown, the calibrated one included,
+    and, unlike ``"trunk_held"``, nothing taken out: energy at touchdown = energy at the previous take-off (1e-6
+    relative), the legs carrying the whole carried energy (no balance loss reported)."""
+    from hop_impedance.simulation.energy_budget import trial_energy_budget
+    from hop_impedance.simulation.scenarios import TRUNK_BALANCE
+
+    chain, cfg = hopping_config(2.2, "hard", 3, variability=False, trunk_balance=TRUNK_BALANCE,
+                                flight="trunk_still", landing="prescribed")
+    tr = simulate_hopping(chain, cfg, seed=1)
+    assert tr.stop_reason == "" and len(tr.stances) == 3
+    assert tr.calibration.touchdown_rates_rad_s[3] == 0.0 and abs(tr.stances[0].touchdown.gd[5]) < 1e-12
+    assert tr.flight_balance_loss_j == [0.0, 0.0]
+    budget = trial_energy_budget(tr)
+    for rec, nxt, row in zip(tr.stances[:-1], tr.stances[1:], budget):
+        st, springs = rec.stance, rec.law.part(Eq3Law)
+
+        def energy(g, gd, rho, springs=springs, ref=st.ref):
+            return sum(mechanical_energy_j(chain, g, gd)) + float(springs.elastic_energy_j(rho, ref))
+
+        e_takeoff = energy(st.g[-1], st.gd[-1], st.rho_rad[-1])
+        e_touchdown = energy(nxt.touchdown.g, nxt.touchdown.gd, nxt.stance.rho_rad[0])
+        assert abs(e_touchdown - e_takeoff) / e_takeoff < 1e-6, (e_takeoff, e_touchdown)
+        assert abs(row["flight_j"]) / e_takeoff < 1e-6 and "flight_balance_loss_j" not in row
+        assert abs(nxt.touchdown.gd[5]) < 1e-12  # the trunk's absolute pitch rate at touchdown
+        assert internal_kinetic_energy_j(chain, nxt.touchdown.g[2:], nxt.touchdown.gd[2:]) > 0.1  # the legs carry it
