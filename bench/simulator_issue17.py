@@ -87,9 +87,17 @@ from hop_impedance.biomech.analysis import analyze_recording  # noqa: E402
 from hop_impedance.impedance.recording_fits import fit_recording_trial  # noqa: E402
 from hop_impedance.impedance.seed_findings import fig7_line  # noqa: E402
 from hop_impedance.simulation.fit_calibration import median_k0_k1, seed_model_fits, table2_k  # noqa: E402
+from hop_impedance.simulation.hopping_trial import FLIGHT_MODELS, LANDINGS  # noqa: E402
 from hop_impedance.simulation.impedance_laws import BiarticularSpring, TrunkBalance  # noqa: E402
 from hop_impedance.simulation.scenarios import (  # noqa: E402
+    SEED_LIKE_HOPPER_BELL_MIN,
+    SEED_LIKE_HOPPER_FLIGHT,
     SEED_LIKE_HOPPER_LAW_SCALE,
+    SEED_LIKE_HOPPER_PAD,
+    SEED_LIKE_HOPPER_PUSH_OFF_GAIN,
+    SEED_LIKE_HOPPER_PUSH_TIMING,
+    SEED_LIKE_HOPPER_PUSH_WEIGHTS,
+    SEED_LIKE_HOPPER_TRUNK,
     SEED_LIKE_LAW_SCALE,
     seed_like_hopper_options,
     seed_like_options,
@@ -481,14 +489,14 @@ def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--push-lags", metavar="A,K,H",
                         help="per joint, the fraction of the push-off's window by which its push starts later, ending "
                              "with the others (impedance_laws.PushOff.lag_fraction; default 0,0,0)")
-    parser.add_argument("--flight", choices=("prescribed", "energy_keeping", "trunk_held", "trunk_still"), default=None,
+    parser.add_argument("--flight", choices=FLIGHT_MODELS, default=None,
                         help="the flight model (hopping_trial.py): energy_keeping returns the segments' motion and the "
                              "springs' energy at take-off at the next touchdown instead of discarding them (issue 17: "
                              "the push-off only replaces real losses); trunk_held the same with the trunk balance holding "
                              "the trunk in flight (zero trunk rate at touchdown, its share a reported flight loss); "
                              "trunk_still the trunk landing at rest with all of the energy in the legs; default the "
                              "options' own")
-    parser.add_argument("--landing", choices=("reversed", "prescribed"), default=None,
+    parser.add_argument("--landing", choices=LANDINGS, default=None,
                         help="with --flight energy_keeping or trunk_held: land along the take-off rates reversed (default) or "
                              "along the prescribed flight's own landing motion (HoppingConfig.landing; same energy)")
     parser.add_argument("--push-off-gain", type=float, default=None, metavar="G",
@@ -513,6 +521,18 @@ def biarticular_spring(text: str) -> BiarticularSpring:
     return BiarticularSpring(*values)
 
 
+def preset_said() -> str:
+    """The preset's one-line description, from the constants that make it (scenarios.seed_like_hopper_options)."""
+    (mm, exponent), timing, weights = SEED_LIKE_HOPPER_PAD, SEED_LIKE_HOPPER_PUSH_TIMING, SEED_LIKE_HOPPER_PUSH_WEIGHTS
+    flight, landing = SEED_LIKE_HOPPER_FLIGHT
+    trunk = SEED_LIKE_HOPPER_TRUNK
+    return (f"its own bell a_min {SEED_LIKE_HOPPER_BELL_MIN:g}, shoe pad {1000 * mm:g} mm n {exponent:g}, push-off "
+            f"{timing[0]:g} / {timing[1]:g} weights {' / '.join(f'{w:g}' for w in weights)} at gain "
+            f"{SEED_LIKE_HOPPER_PUSH_OFF_GAIN:g}, trunk {trunk.stiffness_nm_rad:g} / {trunk.damping_nm_s_rad:g}, "
+            f"{flight.replace('_', '-')} flight landing along the "
+            f"{'prescribed direction' if landing == 'prescribed' else 'take-off rates reversed'}, and law scale")
+
+
 def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     """``seed_like_options()`` (``--hopper seed-like``: ``seed_like_hopper_options()``) with the command line's variant,
     and a one-line description of it."""
@@ -521,9 +541,7 @@ def variant_options(args: argparse.Namespace) -> tuple[dict, str]:
     said_law = f"law Table 2{'' if args.law_scale == 'none' else ' x ' + args.law_scale}"
     said = [f"bell a_min {args.bell if args.bell is not None else options['bell_activation_min']}", said_law]
     if preset:
-        said = ["its own bell a_min 0.9, shoe pad 15 mm n 3, push-off 0.6 / 0.8 weights 1 / -0.1 / 0.3 at gain 0.5, "
-                "trunk 500 / 60, energy-keeping flight landing along the prescribed direction, and law scale"
-                + ("" if args.surface == "rigid" else " (calibrated on the rigid plate)")]
+        said = [preset_said() + ("" if args.surface == "rigid" else " (calibrated on the rigid plate)")]
         said += [f"bell a_min {args.bell}"] * (args.bell is not None) + [said_law] * (args.law_scale != "none")
     if args.bell is not None:
         options["bell_activation_min"] = None if args.bell == 1.0 else args.bell

@@ -60,6 +60,7 @@ from hop_impedance.biomech.kinematics import sagittal_markers, segment_angles_fr
 from hop_impedance.io.analyze_json import analysis_to_json
 from hop_impedance.recording import MARKER_NAMES
 from hop_impedance.simulation.fit_calibration import table2_k
+from hop_impedance.simulation.hopping_trial import FLIGHT_MODELS, LANDINGS
 from hop_impedance.simulation.scenarios import (
     DEFAULT_TOUCHDOWN_RHO,
     PUSH_OFF_TIMING,
@@ -512,7 +513,7 @@ def main() -> None:
     parser.add_argument("--write", action="store_true",
                         help="write docs/simulator_realism.md and the seed table between the README's markers")
     parser.add_argument("--trunk", action="store_true", help="with the trunk-balance moment (scenarios.TRUNK_BALANCE)")
-    parser.add_argument("--flight", default="prescribed", choices=("prescribed", "energy_keeping", "trunk_held", "trunk_still"))
+    parser.add_argument("--flight", default="prescribed", choices=FLIGHT_MODELS)
     parser.add_argument("--posture", default=None,
                         help="touchdown ankle rho1, knee flexion, hip flexion (rad), e.g. 1.6,0.8,0.5; "
                              "default scenarios.DEFAULT_TOUCHDOWN_RHO")
@@ -526,7 +527,7 @@ def main() -> None:
     parser.add_argument("--push-timing", default=None,
                         help="push-off onset, duration as fractions of the passive stance, e.g. 0.4,0.4 (after --seed-like; "
                              "with --hopper: instead of the preset's 0.6,0.8, not with --write)")
-    parser.add_argument("--landing", choices=("reversed", "prescribed"), default=None,
+    parser.add_argument("--landing", choices=LANDINGS, default=None,
                         help="with --hopper --flight energy_keeping or trunk_held: land along the take-off rates reversed "
                              "(default) or along the prescribed flight's own landing motion (simulator_issue17.py's flag); "
                              "not with --write")
