@@ -146,6 +146,22 @@ def test_with_energy_keeping_flight_the_push_off_only_replaces_stance_losses():
     assert losses > 5.0 and abs(gain) < 0.5 * losses  # measured: losses ~10 J, a near-periodic hop
 
 
+def flight_energies(chain, trial) -> list:
+    """Per flight of ``trial``: (energy at take-off, energy at the next touchdown, the stance's record, the next
+    stance's), each energy the segments' mechanical energy plus the Eq. 3 springs' about the stance's touchdown
+    reference (J)."""
+    out = []
+    for rec, nxt in zip(trial.stances[:-1], trial.stances[1:]):
+        st, springs = rec.stance, rec.law.part(Eq3Law)
+
+        def energy(g, gd, rho, springs=springs, ref=st.ref):
+            return sum(mechanical_energy_j(chain, g, gd)) + float(springs.elastic_energy_j(rho, ref))
+
+        out.append((energy(st.g[-1], st.gd[-1], st.rho_rad[-1]),
+                    energy(nxt.touchdown.g, nxt.touchdown.gd, nxt.stance.rho_rad[0]), rec, nxt))
+    return out
+
+
 def test_landing_along_the_prescribed_flights_motion_keeps_the_energy_and_its_direction():
     """``landing="prescribed"``: the energy-keeping flight lands along the prescribed flight's landing motion
     (hopping_trial.prescribed_landing_direction) instead of the reversed take-off rates; the energy at touchdown
@@ -162,14 +178,9 @@ def test_landing_along_the_prescribed_flights_motion_keeps_the_energy_and_its_di
     tr = simulate_hopping(chain, cfg, seed=1)
     assert tr.stop_reason == "" and len(tr.stances) == 3
     reversed_tr = simulate_hopping(chain, dataclasses.replace(cfg, landing="reversed"), seed=1)
-    for rec, nxt in zip(tr.stances[:-1], tr.stances[1:]):
-        st, springs = rec.stance, rec.law.part(Eq3Law)
-
-        def energy(g, gd, rho, springs=springs, ref=st.ref):
-            return sum(mechanical_energy_j(chain, g, gd)) + float(springs.elastic_energy_j(rho, ref))
-
-        e_takeoff = energy(st.g[-1], st.gd[-1], st.rho_rad[-1])
-        assert abs(energy(nxt.touchdown.g, nxt.touchdown.gd, nxt.stance.rho_rad[0]) - e_takeoff) / e_takeoff < 1e-6
+    for e_takeoff, e_touchdown, rec, nxt in flight_energies(chain, tr):
+        st = rec.stance
+        assert abs(e_touchdown - e_takeoff) / e_takeoff < 1e-6
         q_next, rates = nxt.touchdown.g[2:], nxt.touchdown.gd[2:]
         v_to = com_velocity(chain, st.g[-1], st.gd[-1])
         t_f = flight_time_s(chain, body_com(chain, st.g[-1])[1], v_to[1], q_next)
@@ -224,14 +235,7 @@ def test_trunk_held_flight_loses_exactly_the_reported_balance_loss():
     assert tr.calibration.touchdown_rates_rad_s[3] == 0.0
     assert len(tr.flight_balance_loss_j) == 2
     budget = trial_energy_budget(tr)
-    for rec, nxt, loss, row in zip(tr.stances[:-1], tr.stances[1:], tr.flight_balance_loss_j, budget):
-        st, springs = rec.stance, rec.law.part(Eq3Law)
-
-        def energy(g, gd, rho, springs=springs, ref=st.ref):
-            return sum(mechanical_energy_j(chain, g, gd)) + float(springs.elastic_energy_j(rho, ref))
-
-        e_takeoff = energy(st.g[-1], st.gd[-1], st.rho_rad[-1])
-        e_touchdown = energy(nxt.touchdown.g, nxt.touchdown.gd, nxt.stance.rho_rad[0])
+    for (e_takeoff, e_touchdown, _, nxt), loss, row in zip(flight_energies(chain, tr), tr.flight_balance_loss_j, budget):
         assert abs(e_touchdown - (e_takeoff - loss)) / e_takeoff < 1e-6, (e_takeoff, e_touchdown, loss)
         assert abs(nxt.touchdown.gd[5]) < 1e-12  # the trunk's absolute pitch rate at touchdown
         assert internal_kinetic_energy_j(chain, nxt.touchdown.g[2:], nxt.touchdown.gd[2:]) > 0.1  # the legs carry some
@@ -253,14 +257,7 @@ def test_trunk_still_flight_lands_the_trunk_at_rest_and_keeps_all_the_energy():
     assert tr.calibration.touchdown_rates_rad_s[3] == 0.0 and abs(tr.stances[0].touchdown.gd[5]) < 1e-12
     assert tr.flight_balance_loss_j == [0.0, 0.0]
     budget = trial_energy_budget(tr)
-    for rec, nxt, row in zip(tr.stances[:-1], tr.stances[1:], budget):
-        st, springs = rec.stance, rec.law.part(Eq3Law)
-
-        def energy(g, gd, rho, springs=springs, ref=st.ref):
-            return sum(mechanical_energy_j(chain, g, gd)) + float(springs.elastic_energy_j(rho, ref))
-
-        e_takeoff = energy(st.g[-1], st.gd[-1], st.rho_rad[-1])
-        e_touchdown = energy(nxt.touchdown.g, nxt.touchdown.gd, nxt.stance.rho_rad[0])
+    for (e_takeoff, e_touchdown, _, nxt), row in zip(flight_energies(chain, tr), budget):
         assert abs(e_touchdown - e_takeoff) / e_takeoff < 1e-6, (e_takeoff, e_touchdown)
         assert abs(row["flight_j"]) / e_takeoff < 1e-6 and "flight_balance_loss_j" not in row
         assert abs(nxt.touchdown.gd[5]) < 1e-12  # the trunk's absolute pitch rate at touchdown
