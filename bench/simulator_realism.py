@@ -428,9 +428,36 @@ def law_moment_cause(freq_hz: float, joint: int, mmax_nm: float, rom_rad: float)
             f"(simulator_realism.law_moment_cause)")
 
 
+#: A hip excursion "falls as the seed's relative to the centre of mass" when its ratio to the COM drop is within this
+#: fraction of the seed's (:func:`hip_excursion_cause`).
+HIP_OVER_COM_MATCH = 0.10
+
+
+def hip_excursion_cause(freq_hz: float, result: dict) -> str | None:
+    """The cause of a hip-excursion cell out of its band, if it is the centre of mass's drop: the simulated hip falls
+    the same multiple of the COM drop as the seed's hip does of the COM drop Newton gives for the seed's peak GRF and
+    stance (within :data:`HIP_OVER_COM_MATCH`), and the COM itself drops less than that by more than the excursion's
+    band. The hip then moves as the seed's does over a shallower stance; the peak GRF that sets the drop is in its own
+    band. None if that is not what holds (e.g. at 1.87 / 2.2 Hz, where the seed's ratio is above the upright trunk's
+    bound: :data:`OUT_CAUSES`)."""
+    seed = SEED_TABLE1[freq_hz]
+    newton = newton_com_drop(freq_hz, seed["stance_ms"] / 1000.0, seed["grf_bw"])[1]
+    ratio_sim, ratio_seed = result["hip_exc_m"] / result["com_drop_m"], seed["hip_exc_m"] / newton
+    drop_dev = result["com_drop_m"] / newton - 1.0
+    if not (abs(ratio_sim / ratio_seed - 1.0) <= HIP_OVER_COM_MATCH and drop_dev < -BANDS["hip_exc"]):
+        return None
+    return (f"{freq_hz:.2f} Hz: the hip falls {ratio_sim:.2f} x the centre of mass's drop, as the seed's does "
+            f"({ratio_seed:.2f} x Newton's drop for its peak GRF and stance), and the centre of mass drops "
+            f"{drop_dev:+.0%} against that (peak GRF {result['grf_bw'] / seed['grf_bw'] - 1.0:+.0%}, inside its band) "
+            f"(simulator_realism.hip_excursion_cause)")
+
+
 def cell_cause(name: str, freq_hz: float, result: dict) -> str | None:
     """The cause measured for one binding cell out of band (``name`` as :func:`binding_cells` names it, ``result``
-    :func:`measure`'s figures at ``freq_hz``): :func:`law_moment_cause` for a maximal moment, else None."""
+    :func:`measure`'s figures at ``freq_hz``): :func:`law_moment_cause` for a maximal moment,
+    :func:`hip_excursion_cause` for the hip's excursion, else None."""
+    if name.startswith("hip vertical excursion"):
+        return hip_excursion_cause(freq_hz, result)
     if "max moment" not in name:
         return None
     joint = JOINT_NAMES.index(name.split()[0])
@@ -438,19 +465,23 @@ def cell_cause(name: str, freq_hz: float, result: dict) -> str | None:
 
 
 def out_cells(results: dict) -> list[str]:
-    """One line per quantity with binding cells outside their band: the cells and the cause (:data:`OUT_CAUSES`, or
-    for a maximal moment :func:`law_moment_cause`, measured per cell)."""
-    out: dict[str, list[str]] = {}
+    """One line per quantity with binding cells outside their band: the cells and the causes, measured per cell
+    (:func:`cell_cause`) or, for the cells without one, the quantity's :data:`OUT_CAUSES` entry."""
+    out: dict[str, list[tuple[str, str | None]]] = {}
     bands = {}
-    measured: dict[str, list[str]] = {}
     for name, f, sim, seed, band in binding_cells(results):
         if np.isfinite(sim) and abs(sim / seed - 1.0) > band:
-            out.setdefault(name, []).append(f"{f:.2f} Hz {sim / seed - 1.0:+.0%}")
+            out.setdefault(name, []).append((f"{f:.2f} Hz {sim / seed - 1.0:+.0%}", cell_cause(name, f, results[f])))
             bands[name] = band
-            measured.setdefault(name, []).append(cell_cause(name, f, results[f]) or f"{f:.2f} Hz not found")
-    return [f"- OUT {name} (band {bands[name]:.0%}) at {', '.join(cells)}: cause: "
-            + (OUT_CAUSES[name] if name in OUT_CAUSES else "; ".join(measured[name]))
-            for name, cells in out.items()]
+    lines = []
+    for name, cells in out.items():
+        causes = [c for _, c in cells if c]
+        rest = [cell.split(" Hz")[0] + " Hz" for cell, c in cells if not c]
+        if rest:
+            causes.append(f"{', '.join(rest)}: {OUT_CAUSES[name]}" if name in OUT_CAUSES else f"{', '.join(rest)} not found")
+        lines.append(f"- OUT {name} (band {bands[name]:.0%}) at {', '.join(cell for cell, _ in cells)}: cause: "
+                     + "; ".join(causes))
+    return lines
 
 
 def measure_all(freqs: str | None, measure_one) -> dict:

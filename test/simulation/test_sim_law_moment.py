@@ -49,28 +49,52 @@ def test_cause_only_when_the_moment_follows_the_law():
 
 def test_out_cells_lists_every_quantity_with_its_cause():
     """bench/simulator_realism.out_cells on made-up figures: a stance time out (no cause listed: 'not found'), the
-    hip excursion (its listed cause) and a 1.53 Hz knee moment that follows the law over a range in band (measured)."""
+    hip excursion at 2.2 Hz (the hip falls less than the seed's relative to the same COM drop: its listed cause) and
+    at 1.53 Hz (the seed's ratio over a COM drop 20 % shallower: measured), and a 1.53 Hz knee moment that follows the
+    law over a range in band (measured)."""
     r = realism()
     results = {}
     for f, seed in r.SEED_TABLE1.items():
+        newton = r.newton_com_drop(f, seed["stance_ms"] / 1000.0, seed["grf_bw"])[1]
         results[f] = {"stance_ms": seed["stance_ms"], "grf_bw": seed["grf_bw"], "hip_exc_m": seed["hip_exc_m"],
-                      "rom": list(seed["rom"]), "mmax": list(seed["mmax"])}
+                      "com_drop_m": newton, "rom": list(seed["rom"]), "mmax": list(seed["mmax"])}
     results[1.87]["stance_ms"] *= 0.5
     results[2.2]["hip_exc_m"] *= 0.6
+    results[1.53]["hip_exc_m"] *= 0.8
+    results[1.53]["com_drop_m"] *= 0.8
     results[1.53]["rom"][1] = 0.77
     results[1.53]["mmax"][1] = r.table2_law_moment(1.53, 1, 0.77)
     lines = {line.split(" (")[0]: line for line in r.out_cells(results)}
     assert set(lines) == {"- OUT stance time", "- OUT hip vertical excursion", "- OUT knee max moment"}
     assert lines["- OUT stance time"].endswith("cause: 1.87 Hz not found")
     assert "the seed's own tables disagree" in lines["- OUT knee max moment"]
-    assert "hip_over_com_drop_bound" in lines["- OUT hip vertical excursion"]
+    hip = lines["- OUT hip vertical excursion"]
+    assert "at 1.53 Hz -20%, 2.20 Hz -40%" in hip
+    assert "1.53 Hz: the hip falls" in hip and "the centre of mass drops -20%" in hip
+    assert "2.20 Hz: with the trunk upright" in hip and "hip_over_com_drop_bound" in hip
+
+
+def test_hip_excursion_cause_needs_the_seeds_ratio_and_a_shallower_drop():
+    """hip_excursion_cause names the COM's drop only when the hip follows the COM as the seed's does (ratio within
+    10 %) and the COM drops less than the excursion's 15 % band allows."""
+    r = realism()
+    seed = r.SEED_TABLE1[1.53]
+    newton = r.newton_com_drop(1.53, seed["stance_ms"] / 1000.0, seed["grf_bw"])[1]
+    figures = {"hip_exc_m": 0.8 * seed["hip_exc_m"], "com_drop_m": 0.8 * newton, "grf_bw": 0.9 * seed["grf_bw"]}
+    assert "peak GRF -10%" in r.hip_excursion_cause(1.53, figures)
+    in_band = {**figures, "hip_exc_m": 0.9 * seed["hip_exc_m"], "com_drop_m": 0.9 * newton}
+    assert r.hip_excursion_cause(1.53, in_band) is None  # the seed's ratio, the drop in band
+    assert r.hip_excursion_cause(1.53, {**figures, "hip_exc_m": 0.7 * seed["hip_exc_m"]}) is None  # the hip lags
 
 
 def test_issue17_rule_row_marks_the_same_cells():
     """bench/simulator_issue17.py's rule row marks a cell out with the cause simulator_realism measures, no other."""
-    issue17 = bench_module("simulator_issue17")
-    law = realism().table2_law_moment(1.53, 1, 0.77)
+    issue17, r = bench_module("simulator_issue17"), realism()
+    law = r.table2_law_moment(1.53, 1, 0.77)
     figures = {"mmax": [200.0, law, 40.0], "rom": [0.85, 0.77, 0.37]}
     assert "law_moment_cause" in issue17.cause_mark("knee max moment (N m)", 1.53, figures)
     assert issue17.cause_mark("knee max moment (N m)", 1.53, {**figures, "mmax": [200.0, 1.3 * law, 40.0]}) == ""
     assert issue17.cause_mark("stance time (ms)", 1.53, figures) == ""
+    hip = {"hip_exc_m": 0.6 * r.SEED_TABLE1[2.2]["hip_exc_m"], "grf_bw": 3.5,
+           "com_drop_m": r.newton_com_drop(2.2, 0.282, 3.5)[1]}
+    assert issue17.cause_mark("hip vertical excursion (m)", 2.2, hip) == " (cause: simulator_realism.OUT_CAUSES)"
