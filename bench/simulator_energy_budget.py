@@ -331,10 +331,57 @@ def find_seed_like_orbits(path=ORBIT_PATH, at_seed_frequency: bool = False, extr
 #: Session 32 (the preset's law re-found for the energy-keeping flight): each re-solved from session 31's turning point
 #: (1.53: (1.1332, 0.3400, 0.0953, -0.0201, -0.009), 1.87: (0.5810, 0.2742, 0.0766, -0.0007, -0.00921)), stored here as
 #: found so that ``--find-orbits --write`` starts on them.
+#: Session 33 (the trunk-still preset's law): by continuation in the law's factors from session 32's law (steps of
+#: 1/8 to 1/3 of the way, each solved from the previous turning point); with the toe height held the continuation
+#: stalls on a fold (1.87 Hz at 0.21 of the way, touchdown speed 0.85 m/s; residual 2e-4), so the toe height was
+#: raised there (1.87: -9.21 -> -8.5 mm at 0.21 of the way, then to the end). At 1.53 Hz raising it (to -7.15 mm), or
+#: holding a joint's flexion instead, stalls again at 0.76-0.80 of the way (residual 1e-4..3e-3), so 1.53 Hz's is the
+#: third random turning point of ``--scan-turning-points 1.53 --scan-seed 2`` at the new law (residual 5.8e-10), as printed.
 SYMMETRIC_TURNING_POINTS = {
-    1.53: (1.1855213928120882, 0.420873784060742, 0.13973128812459235, -0.016369796989076573, -0.009),
-    1.87: (0.6280157716494259, 0.2985377253519379, 0.08377791818274717, -0.0017847487408250205, -0.009209738759627484),
+    1.53: (1.0834, 0.4138, 0.1219, -0.0103, -0.0105),
+    1.87: (0.6349146243849653, 0.29811695135088956, 0.08278064268129605, -0.0017920565023042117, -0.0085),
 }
+
+
+#: ``--find-orbits`` (session 33, the trunk-still preset's law): the 2.2 Hz law's touchdown state (speed, COM vx, COM
+#: ahead, rates q1..q4) and foot placement reference (m) that the Newton steps start from. The calibrated hop's Newton
+#: path (:func:`find_seed_like_orbits`) ends at this law on a hop of 12 ms flight; this is session 32's stored hop
+#: carried by Newton steps through the law's factors (a quarter, five eighths, all of the way from session 32's law,
+#: each converged to 3e-8; stance 285.0 ms, flight 123.4 ms).
+NEWTON_STARTS = {
+    2.2: ((0.6573478231073714, -0.11718899037897791, 0.025325818976548533, 1.594521412735398, -1.2205717888369605,
+           0.5098340314317543, 0.44718521013131246), 0.0027697509686915372),
+}
+
+
+def hop_with_feedback(chain, config, x: np.ndarray, ahead: float):
+    """The periodic hop nearest touchdown state ``x`` (foot placement reference ``ahead``) of the trial's own hop map
+    landing along its touchdown rates (periodic_hop.periodic_hop) and the landing feedback that makes it attract
+    (periodic_hop.landing_feedback); returns (hop, stored dict)."""
+    from hop_impedance.simulation.hopping_trial import given_start_calibration
+    from hop_impedance.simulation.periodic_hop import landing_feedback, periodic_hop
+
+    config = dataclasses.replace(config, com_ahead_m=float(ahead), first_touchdown=tuple(float(v) for v in x),
+                                 landing_rates_rad_s=tuple(float(v) for v in x[3:]))
+    cal = given_start_calibration(config)
+    hop = periodic_hop(chain, config, cal, np.asarray(x, float), own_landing=True)
+    config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in hop.state[3:]))
+    cal = dataclasses.replace(cal, com_ahead_m=hop.com_ahead_m)
+    feedback, closed = landing_feedback(chain, config, cal, hop.state)
+    return hop, stored_hop(hop, feedback, closed, bool(hop.success))
+
+
+def find_newton_orbits() -> dict:
+    """The periodic hops of the seed-like hopper's lossless counterpart by Newton steps from :data:`NEWTON_STARTS`
+    (:func:`hop_with_feedback`). Returns {frequency: dict of the hop and its eigenvalues}."""
+    from hop_impedance.simulation.scenarios import seed_like_lossless_counterpart
+
+    out = {}
+    for freq, (x, ahead) in NEWTON_STARTS.items():
+        chain, config = seed_like_lossless_counterpart(freq)
+        hop, out[freq] = hop_with_feedback(chain, config, np.asarray(x, float), ahead)
+        print(f"  {freq:g} Hz: periodic hop from the stored start (" + hop_summary(hop, out[freq]), flush=True)
+    return out
 
 
 def find_symmetric_orbits() -> dict:
@@ -343,23 +390,15 @@ def find_symmetric_orbits() -> dict:
     polished as a fixed point of the trial's own hop map landing along its touchdown rates (periodic_hop.periodic_hop),
     and the landing feedback that makes it attract (periodic_hop.landing_feedback).
     Returns {frequency: dict of the hop (scenarios.SEED_LIKE_LOSSLESS_HOPS' entries) and its eigenvalues}."""
-    from hop_impedance.simulation.hopping_trial import given_start_calibration
-    from hop_impedance.simulation.periodic_hop import landing_feedback, periodic_hop, symmetric_hop
+    from hop_impedance.simulation.periodic_hop import symmetric_hop
     from hop_impedance.simulation.scenarios import seed_like_lossless_counterpart
 
     out = {}
     for freq, mid in SYMMETRIC_TURNING_POINTS.items():
         chain, config = seed_like_lossless_counterpart(freq)
         mid, x, res = symmetric_hop(chain, config, np.asarray(mid, float))
-        config = dataclasses.replace(config, com_ahead_m=float(x[2]), first_touchdown=tuple(float(v) for v in x),
-                                     landing_rates_rad_s=tuple(float(v) for v in x[3:]))
-        cal = given_start_calibration(config)
-        hop = periodic_hop(chain, config, cal, x, own_landing=True)
-        config = dataclasses.replace(config, landing_rates_rad_s=tuple(float(v) for v in hop.state[3:]))
-        cal = dataclasses.replace(cal, com_ahead_m=hop.com_ahead_m)
-        feedback, closed = landing_feedback(chain, config, cal, hop.state)
-        out[freq] = {**stored_hop(hop, feedback, closed, bool(hop.success)), "symmetric_residual": res,
-                     "turning_point": [float(v) for v in mid]}
+        hop, stored = hop_with_feedback(chain, config, x, float(x[2]))
+        out[freq] = {**stored, "symmetric_residual": res, "turning_point": [float(v) for v in mid]}
         print(f"  {freq:g} Hz: symmetric hop (turning point residual {res:.1e}; as the trial's fixed point "
               + hop_summary(hop, out[freq]), flush=True)
     return out
@@ -466,6 +505,7 @@ def main() -> None:
     parser.add_argument("--scan-turning-points", type=float, metavar="HZ",
                         help="random turning points of symmetric hops at this law frequency (scan_turning_points)")
     parser.add_argument("--scan-count", type=int, default=6, help="with --scan-turning-points: how many")
+    parser.add_argument("--scan-seed", type=int, default=0, help="with --scan-turning-points: the random generator's seed")
     parser.add_argument("--newton-continuation", action="store_true",
                         help="with --find-orbits: session 15's continuation by Newton steps on the hop map from the "
                              "calibrated 2.2 Hz hop (reaches 1.93 Hz) instead of the symmetric hops (session 31)")
@@ -478,7 +518,7 @@ def main() -> None:
                              "(impedance_laws.BiarticularSpring; printed only, never written)")
     args = parser.parse_args()
     if args.scan_turning_points:
-        scan_turning_points(args.scan_turning_points, args.scan_count)
+        scan_turning_points(args.scan_turning_points, args.scan_count, args.scan_seed)
         return
     if args.find_orbits:
         path = ORBIT_PATH[:ORBIT_PATH.index(args.to) + 1]
@@ -488,9 +528,8 @@ def main() -> None:
         if args.newton_continuation or args.at_seed_frequency or extra is not None:
             found = find_seed_like_orbits(path, at_seed_frequency=args.at_seed_frequency, extra=extra)
             write_orbits(found, args.write and not args.at_seed_frequency and extra is None)
-        else:  # 2.2 Hz's law: the continuation's first hop; the lower laws: symmetric hops (session 31)
-            found = find_seed_like_orbits(ORBIT_PATH[:1])
-            write_orbits({**found, **find_symmetric_orbits()}, args.write)
+        else:  # 2.2 Hz's law: Newton steps from its stored start (session 33); the lower laws: symmetric hops
+            write_orbits({**find_newton_orbits(), **find_symmetric_orbits()}, args.write)
         return
     if args.lossless and args.hopper:
         for freq in (float(f) for f in args.freqs.split(",")):

@@ -21,7 +21,7 @@ quantity the analysis uses depends on it.
   time-reversed take-off rates (:func:`flight_segment_rates`); with the COM
   ballistic, kinetic + gravitational + stored elastic energy at touchdown equals
   that at take-off (test/simulation/test_sim_flight_energy.py). Not the
-  library's default; the seed-like preset's flight since session 32
+  library's default; the seed-like preset's flight in session 32
   (scenarios.SEED_LIKE_HOPPER_FLIGHT, landing ``"prescribed"``). With lossless
   laws and no push-off, what the hop gains or loses is then the work of a non-conservative part: the trunk balance's
   (:class:`~hop_impedance.simulation.impedance_laws.TrunkBalance`, a moment on
@@ -44,8 +44,8 @@ quantity the analysis uses depends on it.
   the legs carry all of the carried energy (:func:`touchdown_segment_rates` with the
   trunk held), so energy at touchdown = energy at take-off as for
   ``"energy_keeping"``; only the landing motion's direction differs (the trunk's
-  part of it moved to the legs). Measured as a seed-like preset in docs/simulator.md,
-  "Session 32".
+  part of it moved to the legs). The seed-like preset's flight since session 33
+  (scenarios.SEED_LIKE_HOPPER_FLIGHT; docs/simulator.md, "Session 32" and "Session 33").
 
 Touchdown and hop sequencing
 ----------------------------
