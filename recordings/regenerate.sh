@@ -12,8 +12,8 @@ sim --hopper seed-like --freq 1.53 --surface rigid --hops 10 --seed 11 --out "$H
 sim --hopper seed-like --freq 1.87 --surface rigid --hops 10 --seed 12 --out "$HERE/sim_1p87hz_hard.mcap"
 sim --hopper seed-like --freq 2.20 --surface rigid --hops 10 --seed 13 --out "$HERE/sim_2p20hz_hard.mcap"
 # Seed 001's pair stays on the default hopper: the seed-like hopper finds no periodic 2.2 Hz hop on seed 001's soft
-# law (closest: 437 ms stance, 23 ms flight; bench/simulator_seed001_shape.py --hopper seed-like --surface rigid
-# --timings 0.6,0.8 --freqs 2.2) and its bell excludes the time-based activation below (README.md).
+# law (session 33's preset: closest 419 ms stance, 41 ms flight; test/simulation/test_sim_seed001_prepared.py) and its
+# bell excludes the time-based activation below (README.md).
 sim --freq 2.20 --surface soft --hops 10 --seed 14 --out "$HERE/sim_2p20hz_soft.mcap"
 # Seed 001's unexpected surface: time-based activation tuned on soft; hops 4 and 7 land on hard.
 sim --freq 2.20 --surface soft --activation --unexpected hard --unexpected-hops 4,7 --hops 10 --seed 15 \

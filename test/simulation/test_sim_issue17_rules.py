@@ -15,10 +15,13 @@ def issue17():
 
 
 def measures(issue17, factors: dict) -> dict:
-    """Seed Table 1 itself times ``factors`` {(quantity, frequency): factor}, as the bench's measures."""
+    """Seed Table 1 itself times ``factors`` {(quantity, frequency): factor}, as the bench's measures (the COM drop:
+    Newton's for the seed's peak GRF and stance, simulator_realism.newton_com_drop)."""
     out = {}
+    newton_com_drop = bench_module("simulator_realism").newton_com_drop
     for f, seed in issue17.SEED_TABLE1.items():
         realism = {"stance_ms": seed["stance_ms"], "grf_bw": seed["grf_bw"], "hip_exc_m": seed["hip_exc_m"],
+                   "com_drop_m": newton_com_drop(f, seed["stance_ms"] / 1000.0, seed["grf_bw"])[1],
                    "rom": np.array(seed["rom"], float), "mmax": np.array(seed["mmax"], float)}
         for (key, g, j), factor in factors.items():
             if g == f:
@@ -42,7 +45,8 @@ def test_binding_cells_are_issue_17s_eight_per_frequency_with_its_bands(issue17)
 def test_three_cells_out_pass_unless_one_is_stance_grf_or_ankle(issue17):
     allowed = {("hip_exc_m", 1.87, None): 0.7, ("hip_exc_m", 2.2, None): 0.84, ("mmax", 1.53, 1): 1.26}
     rows, out = issue17.realism_rows(measures(issue17, allowed))
-    assert out == ["hip vertical excursion (m) at 1.87 Hz", "hip vertical excursion (m) at 2.2 Hz",
+    assert out == ["hip vertical excursion (m) at 1.87 Hz (cause: simulator_realism.OUT_CAUSES)",
+                   "hip vertical excursion (m) at 2.2 Hz (cause: simulator_realism.OUT_CAUSES)",
                    "knee max moment (N m) at 1.53 Hz"]
     assert rows[-1].passed
     rows, out = issue17.realism_rows(measures(issue17, {("stance_ms", 2.2, None): 0.851}))  # inside the band
@@ -118,18 +122,18 @@ def test_bell_row_reads_issue_17s_share_of_stances(issue17):
 
 def test_flight_flag_sets_the_flight_model(issue17):
     """``--flight prescribed`` (the preset's flight of sessions 14-31) changes only the preset's flight model, which is
-    the energy-keeping one since session 32."""
+    the trunk-still one since session 33."""
     base, _ = issue17.variant_options(issue17.VariantArgs(hopper="seed-like", law_scale="none", surface="rigid"))
     options, said = issue17.variant_options(issue17.VariantArgs(hopper="seed-like", law_scale="none", surface="rigid",
                                                                 flight="prescribed"))
-    assert base["flight"] == "energy_keeping" and options["flight"] == "prescribed" and said.endswith("flight prescribed")
+    assert base["flight"] == "trunk_still" and options["flight"] == "prescribed" and said.endswith("flight prescribed")
     assert {k: v for k, v in options.items() if k != "flight"} == {k: v for k, v in base.items() if k != "flight"}
 
 
 def test_the_flight_row_reads_the_truths_energy_budget(issue17):
-    """Issue 17's flight criterion from a truth file's per-stance budgets: the bundled 2.2 Hz recording (session 32's
-    preset, energy-keeping flight) keeps the energy in flight to round-off (|flight_j| at most 2.3e-13 J of about
-    570 J) and its push-off does 9.2 J per hop (6.5-11.0); a flight that discards 1 J of 570 fails the row."""
+    """Issue 17's flight criterion from a truth file's per-stance budgets: the bundled 2.2 Hz recording (session 33's
+    preset, trunk-still flight) keeps the energy in flight to round-off (|flight_j| at most 2.3e-13 J of about
+    570 J) and its push-off does 10.4 J per hop (7.1-12.2); a flight that discards 1 J of 570 fails the row."""
     from pathlib import Path
 
     from hop_impedance.simulation.truth import load_truth
@@ -137,7 +141,7 @@ def test_the_flight_row_reads_the_truths_energy_budget(issue17):
     truth = load_truth(Path(__file__).resolve().parents[2] / "recordings" / "sim_2p20hz_hard.truth.json")
     energy = issue17.flight_energy(truth)
     assert energy["flight_rel"] < 1e-15
-    assert energy["push_off_j"] == pytest.approx((9.22, 6.5, 11.0), abs=0.05)
+    assert energy["push_off_j"] == pytest.approx((10.37, 7.11, 12.22), abs=0.05)
     measures = {2.2: issue17.FrequencyMeasure({}, {}, None, {}, {}, {}, {}, energy)}
     assert issue17.energy_rows(measures)[0].passed
     lossy = {**truth, "stances": [{**s, "energy_j": {**s["energy_j"], "flight_j": -1.0}} for s in truth["stances"]]}
