@@ -53,19 +53,28 @@ def test_gap_stance_rejected_as_message_loss_others_unchanged(rec, clean):
     assert len(accepted) == len(outside) == 7
     first_after = min(i for i, c in enumerate(outside) if c.touchdown_s > start)
     for i, (s, c) in enumerate(zip(accepted, outside)):
-        # the first stance after the gap has another flight for its baseline: the gap ends 7 ms after the take-off
+        # the first stance after the gap has another flight for its baseline: the gap ends 5.4 ms after the take-off
         # before it, inside the 20 ms of plate ringing (settle_s) the clean run leaves out, but the detector starts
-        # afresh after a gap and averages those samples in (2.9-3.8 N): its baseline is 0.126 N, not 0.063 N. That
-        # +0.063 N raises the detector's 16 N crossing level on both edges, so the touchdown comes later and the
-        # take-off earlier, each by 0.063 N over the force's slope there (20.7 N/ms rising, 3.8 N/ms falling on the
-        # d8eda79 recording): +3.0 / -16.5 us (this test's figures); every other stance's events to 1e-6 s
+        # afresh after a gap and averages those samples in (-3.3 to 4.3 N): its baseline is 0.141 N, not 0.084 N. That
+        # +0.057 N raises the detector's 16 N crossing level on both edges, so the touchdown comes later and the
+        # take-off earlier, each by 0.057 N over the force's slope there (25.2 N/ms rising, 6.9 N/ms falling on
+        # session 33's recording, the trunk-still flight): +2.3 / -8.3 us (this test's figures; the d8eda79 recording:
+        # +0.063 N, +3.0 / -16.5 us); every other stance's events to 1e-6 s
         if i == first_after:
             assert 0 < s.touchdown_s - c.touchdown_s < 1e-5 and -2.5e-5 < s.takeoff_s - c.takeoff_s < 0
         else:
             assert abs(s.touchdown_s - c.touchdown_s) < 1e-6 and abs(s.takeoff_s - c.takeoff_s) < 1e-6
         peak = np.max(np.abs(c.joints.moment_nm), axis=0)
-        # the first stance after the gap has another baseline and filter start: up to 0.03 N m (4e-4 of the peak)
-        assert np.all(np.max(np.abs(s.joints.moment_nm - c.joints.moment_nm), axis=0) < 1e-3 * peak)
+        moved = np.max(np.abs(s.joints.moment_nm - c.joints.moment_nm), axis=0)
+        if i == first_after:
+            # another plate zeroing: the flight before it lies partly in the gap, so its offset is the mean of other
+            # samples (the force noise's 2 N over ~150 samples: 0.16 N s.d.) and interpolated from another centre;
+            # at its touchdown the zeroed Fx / Fz / My move by 0.073 N / -0.040 N / 0.020 N m, the moments up to
+            # 0.027 / 0.061 / 0.081 N m, most at the hip (longest lever): 0.9e-4 / 7.6e-4 / 1.19e-3 of the peaks
+            # (session 33's recording; the d8eda79 recording's draw: 0.022 N Fx, up to 0.03 N m, 4e-4 of the peak)
+            assert np.all(moved < 2e-3 * peak)
+        else:  # the same data: round-off and the filters' far edge only (up to 2.8e-7 of the peak, measured)
+            assert np.all(moved < 1e-5 * peak)
 
 
 def test_long_gaps_run_without_recursion(rec, clean):

@@ -94,13 +94,19 @@ def test_short_window_hip_fit_leaves_the_takeoff_out(recording):
         assert fits["hip"].coefficients == fit_stance_joints(s, cut, joints=("hip",))["hip"].coefficients
         with_takeoff = fit_stance_joints(replace(s, data_after_takeoff_s=None), options)
         hip, hip_with = fits["hip"], with_takeoff["hip"]
-        assert hip.status == "solved" and "k0" in hip.coefficients
-        if hip_with.status == "solved":  # the last 20 ms move k0 (by 1-40 % on the d8eda79 recording) or the terms kept
-            assert _coefficients_differ(hip.coefficients, hip_with.coefficients)
+        if hip.status == hip_with.status == "solved":
+            # the last 20 ms move k0 (by 1-46 % on session 33's recording, 1-40 % on d8eda79's) or the terms kept
+            assert "k0" in hip.coefficients and _coefficients_differ(hip.coefficients, hip_with.coefficients)
         else:
-            # with the last 20 ms (continued markers) stance 2 of the d8eda79 recording keeps no significant hip
-            # stiffness at all; without them its k0 is 564 N m/rad, the whole-record stance's 532 N m/rad
-            assert "kept no stiffness term" in hip_with.rejection_reason
+            # the hip's moment is mostly the trunk balance (recordings/README.md), its stiffness marginal at ~6
+            # effective samples: one of the two fits may keep none. Session 33's recording (the trunk-still flight),
+            # stance 6: without the last 20 ms k0's p-value is 0.072 (alpha 0.05, 6.0 effective samples), so no term;
+            # with them k0 493, k1 5136 N m/rad, the whole-record stance's 494 / 5407. The d8eda79 recording, stance 2,
+            # the other way round: with them no term, without them k0 564 N m/rad (whole record 532)
+            rejected = hip_with if hip.status == "solved" else hip
+            solved = hip if hip.status == "solved" else hip_with
+            assert solved.status == "solved" and "k0" in solved.coefficients
+            assert "kept no stiffness term" in rejected.rejection_reason
             lost += 1
         for joint in ("ankle", "knee"):
             assert fits[joint].coefficients == with_takeoff[joint].coefficients

@@ -6,7 +6,8 @@ different edge and the flight baseline is shorter (stages.py docstring). The
 difference must stay small where it matters to a controller: the fitted
 coefficients. The bound is 5 % on k0 and 2 % on k1 (measured with the
 short-window treatment of analysis.extend_past_window: k0 0.88 %, k1 0.81 %;
-before it, with the filters' own edge padding: k0 3.0 %, k1 1.1 %): far
+session 33's recording: k0 0.73 %, k1 1.12 % over the 28 fits with the batch's
+terms; before it, with the filters' own edge padding: k0 3.0 %, k1 1.1 %): far
 inside the stance-to-stance spread of the fits on noisy data. Figures quoted in docs/pipeline.md are printed by
 ``.venv/bin/python -m pytest test/biomech/test_stages_low_latency.py -s -q``.
 """
@@ -46,6 +47,7 @@ def test_low_latency_coefficients_stay_close_to_batch():
     options = default_fit_options(batch.options)
     worst = {name: 0.0 for name in ("k0", "k1")}
     compared = 0
+    other_terms = []
     for b, s in zip(batch.stances, live):
         if b.rejection_reason is not None:
             assert s.rejection_reason is not None
@@ -54,7 +56,9 @@ def test_low_latency_coefficients_stay_close_to_batch():
         for joint in JOINTS:
             if not (fb[joint].ok and fs[joint].ok):
                 continue
-            assert fb[joint].terms == fs[joint].terms, (b.index, joint)
+            if fb[joint].terms != fs[joint].terms:
+                other_terms.append((b.index, joint))
+                continue
             for name in worst:
                 if name in fb[joint].coefficients:
                     ref = fb[joint].coefficients[name]
@@ -63,5 +67,10 @@ def test_low_latency_coefficients_stay_close_to_batch():
             compared += 1
     print(f"\nlow-latency vs batch on {RECORDING.name}: {compared} joint fits, "
           f"max relative difference k0 {worst['k0']:.2%}, k1 {worst['k1']:.2%}")
+    # the model reduction of two knees (session 33's recording, the trunk-still flight) ends on other terms, at the
+    # edge of its tests: stance 4's batch keeps k3 (p 0.013) and drops b0 (p 0.32), the live window drops k3 as
+    # collinear and keeps b0 (p 0.054); stance 5's batch drops b0 at p 0.0511 (alpha 0.05), the live window keeps it.
+    # The d8eda79 recording: none. Any other stance or joint is a change to look at.
+    assert other_terms == [(4, "knee"), (5, "knee")]
     assert compared >= 20
     assert worst["k0"] < 0.05 and worst["k1"] < 0.02
