@@ -38,7 +38,7 @@ def _verdicts(analysis, fits, bounds=None):
 
 
 def test_the_bundled_2p20_recording_is_valid_at_ankle_and_knee_and_its_hip_where_the_fit_explains_the_moment(fitted):
-    """The seed-like recording (session 32's preset, energy-keeping flight): every ankle and knee fit is valid, the
+    """The seed-like recording (session 33's preset, the trunk-still flight): every ankle and knee fit is valid, the
     knee's K(rho) with a non-zero edge at take-off in 9 of 10 stances (seed 000's bell; one on the QP's K >= 0 bound,
     round-off, not a spring pushing the wrong way; sessions 14-31's recording had all 10 there); the hip's moment holds
     the trunk balance (recordings/README.md), which is no function of the hip angle, so most hip fits explain too
@@ -50,18 +50,20 @@ def test_the_bundled_2p20_recording_is_valid_at_ankle_and_knee_and_its_hip_where
     assert all(reason is None for _, reason in legs), [r for _, r in legs if r]
     knee_min = [float(np.min(f["knee"].stiffness)) for f in fits]
     assert sum(abs(k) < 1e-9 for k in knee_min) == 1  # measured: stance 6's knee ends on the bound
-    assert sum(k > 25.0 for k in knee_min) == 9  # the others' least K (at take-off): 28-90 N m/rad
+    assert sum(k > 15.0 for k in knee_min) == 9  # the others' least K (at take-off): 18.5-101 N m/rad (d8eda79: 28-90)
     hip = [(r, f["hip"].r_squared) for (joint, _, r), f in zip([v for v in verdicts if v[0] == "hip"], fits)]
     for reason, r2 in hip:  # invalid exactly where R^2 < 0.5 or b_eq < -2 N m s/rad says so
         assert (reason is None) == (r2 >= 0.5 and "b_eq" not in (reason or "")), (reason, r2)
         assert reason is None or reason.startswith("implausible: R^2") == (r2 < 0.5)
-    assert sum(r is None for r, _ in hip) == 1  # measured: stance 4, R^2 0.92
-    assert sum("b_eq" in (r or "") for r, _ in hip) == 6  # -2.8 to -7.3 N m s/rad; the other 3: R^2 0.11-0.48
+    assert sum(r is None for r, _ in hip) == 2  # measured: stances 4 and 5, R^2 0.90 and 0.55
+    assert sum("b_eq" in (r or "") for r, _ in hip) == 3  # -3.1 to -4.9 N m s/rad; the other 5: R^2 -1.13 to 0.15
     b_eq = np.array([b for b, _ in legs])
     # the documented scatter of the OLS damping around 0 (docs/pipeline.md): all within the tolerance
-    assert -1.8 < b_eq.min() and b_eq.max() < 0.2  # -1.69 to +0.14 N m s/rad measured
+    assert -1.9 < b_eq.min() and b_eq.max() < 0.5  # -1.85 to +0.43 N m s/rad measured (d8eda79: -1.69 to +0.14)
     strict = _verdicts(*fitted, PlausibilityBounds(damping_tolerance=0.0))
-    assert sum(r is None for _, _, r in strict) <= 3  # why the tolerance exists (measured: 2 of 30 valid)
+    # why the tolerance exists: measured 11 of 30 valid without it (9 knees, the 2 hips; every ankle's b_eq is
+    # below 0), 22 with it (d8eda79's recording: 2 of 30 without it)
+    assert sum(r is None for _, _, r in strict) <= 12
     assert controller_damping(-0.9) == 0.0 and controller_damping(1.5) == 1.5
 
 
