@@ -99,17 +99,17 @@ def test_no_published_term_is_held_at_zero_on_a_push_off_recording():
 @pytest.mark.slow
 @pytest.mark.skipif(not (RECORDINGS / "sim_1p53hz_hard.mcap").exists(), reason="bundled recording missing")
 def test_a_term_held_at_zero_is_one_the_rule_cannot_remove_on_the_1p53_hz_recording():
-    """Bundled 1.53 Hz trial (d8eda79): the push-off holds terms at zero in 23 per-stance reductions, and two cases
-    stay at 0 with p = 1, both outside the rule by design:
+    """Bundled 1.53 Hz trial (session 33's recording, the trunk-still flight): the push-off holds terms at zero in 17
+    per-stance reductions, and the terms that stay at 0 with p = 1 are outside the rule by design, of two kinds:
 
-    - stance 3's hip reduces to k0 + k1 with k0 = 0 (K >= 0 at touchdown, where K = k0): the polynomial hierarchy
-      keeps k0 while k1 is in the model;
-    - the hip's trial structure is k0 + b0 (b0 kept in 5 of 10 stances, a tie, so the seed's b0 stays), and every
-      stance is refitted with it without reduction (one model per trial, issue 15): stances 3, 4, 6 and 9, whose
-      own reductions did not keep b0, have it at 0.
+    - a term the polynomial hierarchy keeps while a higher one is in the model (the d8eda79 recording: stance 3's hip
+      reduced to k0 + k1 with k0 = 0, K >= 0 at touchdown, where K = k0); none on this recording;
+    - the hip's trial structure is k0 + b0 (b0 kept in 7 of 10 stances; d8eda79's: 5, a tie, so the seed's b0
+      stayed), and every stance is refitted with it without reduction (one model per trial, issue 15): stances 3, 4
+      and 9, whose own reductions did not keep b0, have it at 0 (d8eda79's: 3, 4, 6 and 9).
     """
     trial = _trial_fits("sim_1p53hz_hard")
-    assert len(_held_steps(trial)) >= 20  # 23
+    assert len(_held_steps(trial)) >= 15  # 17 (d8eda79's: 23)
     hierarchy, imposed = [], []
     for i, (fits, own) in enumerate(zip(trial.fits, trial.stance_fits)):
         for joint, fit in own.items():
@@ -120,6 +120,6 @@ def test_a_term_held_at_zero_is_one_the_rule_cannot_remove_on_the_1p53_hz_record
             for name in _held(fit) if fit.ok else []:
                 assert name in trial.structures[joint].terms and name not in own[joint].terms, (i, joint, name)
                 imposed.append((i, joint, name))
-    assert hierarchy == [(3, "hip", "k0")]
-    assert imposed == [(i, "hip", "b0") for i in (3, 4, 6, 9)]
-    assert trial.structures["hip"].terms == ("k0", "b0") and trial.structures["hip"].kept_in["b0"] == 5
+    assert hierarchy == []
+    assert imposed == [(i, "hip", "b0") for i in (3, 4, 9)]
+    assert trial.structures["hip"].terms == ("k0", "b0") and trial.structures["hip"].kept_in["b0"] == 7
