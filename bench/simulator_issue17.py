@@ -325,8 +325,9 @@ def cause_mark(name: str, freq_hz: float, realism: dict) -> str:
     """A mark after a cell out whose cause bench/simulator_realism.py gives (:func:`simulator_realism.cell_cause`,
     measured per cell, or the quantity's ``OUT_CAUSES``); the cause itself is printed there."""
     if cell_cause(name, freq_hz, realism):
-        return " (cause measured: " + ("simulator_realism.law_moment_cause" if "max moment" in name
-                                       else "simulator_realism.hip_excursion_cause") + ")"
+        measured = ("law_moment_cause" if "max moment" in name
+                    else "hip_range_cause" if "range of flexion" in name else "hip_excursion_cause")
+        return f" (cause measured: simulator_realism.{measured})"
     return " (cause: simulator_realism.OUT_CAUSES)" if name in OUT_CAUSES else ""
 
 

@@ -452,12 +452,39 @@ def hip_excursion_cause(freq_hz: float, result: dict) -> str | None:
             f"(simulator_realism.hip_excursion_cause)")
 
 
+#: The knee's range less the hip's "matches the seed's" within this fraction (:func:`hip_range_cause`).
+KNEE_LESS_HIP_MATCH = 0.10
+
+
+def hip_range_cause(freq_hz: float, result: dict) -> str | None:
+    """The cause of a hip range-of-flexion cell out of its band, if it is the knee's range: with the trunk upright the
+    hip flexes as the thigh turns, i.e. by the knee's flexion less the shank's forward turn, so the knee's range less
+    the hip's stands for the shank's (and the trunk's) turn. When that difference is the seed's (within
+    :data:`KNEE_LESS_HIP_MATCH`) and the knee's range is inside its band, the hip's range is the knee's less a seed-like
+    turn: a knee deviation comes to the hip multiplied by the seed's knee / hip ratio (1.9 at 1.53 Hz), so a knee in
+    its band can carry the hip out of it. None if that is not what holds."""
+    seed_knee, seed_hip = SEED_TABLE1[freq_hz]["rom"][1:3]
+    knee, hip = float(result["rom"][1]), float(result["rom"][2])
+    turn_dev = (knee - hip) / (seed_knee - seed_hip) - 1.0
+    knee_dev = knee / seed_knee - 1.0
+    if not (abs(turn_dev) <= KNEE_LESS_HIP_MATCH and abs(knee_dev) <= BANDS["rom"]):
+        return None
+    turn_extra = (knee - hip) - (seed_knee - seed_hip)
+    return (f"{freq_hz:.2f} Hz: the knee's range less the hip's, the shank's and trunk's turn with the trunk upright, is "
+            f"{knee - hip:.2f} rad against the seed's {seed_knee - seed_hip:.2f} ({turn_dev:+.0%}), and the knee's range "
+            f"is {knee_dev:+.0%} (inside its band); x {seed_knee / seed_hip:.1f} (the seed's knee / hip ranges) that gives "
+            f"{knee_dev * seed_knee / seed_hip:+.0%} at the hip, the turn's {turn_extra:+.2f} rad "
+            f"{-turn_extra / seed_hip:+.0%} (simulator_realism.hip_range_cause)")
+
+
 def cell_cause(name: str, freq_hz: float, result: dict) -> str | None:
     """The cause measured for one binding cell out of band (``name`` as :func:`binding_cells` names it, ``result``
     :func:`measure`'s figures at ``freq_hz``): :func:`law_moment_cause` for a maximal moment,
-    :func:`hip_excursion_cause` for the hip's excursion, else None."""
+    :func:`hip_excursion_cause` for the hip's excursion, :func:`hip_range_cause` for its range of flexion, else None."""
     if name.startswith("hip vertical excursion"):
         return hip_excursion_cause(freq_hz, result)
+    if name.startswith("hip range of flexion"):
+        return hip_range_cause(freq_hz, result)
     if "max moment" not in name:
         return None
     joint = JOINT_NAMES.index(name.split()[0])

@@ -87,6 +87,18 @@ def test_hip_excursion_cause_needs_the_seeds_ratio_and_a_shallower_drop():
     assert r.hip_excursion_cause(1.53, {**figures, "hip_exc_m": 0.7 * seed["hip_exc_m"]}) is None  # the hip lags
 
 
+def test_hip_range_cause_needs_the_seeds_knee_less_hip_and_a_knee_in_band():
+    """hip_range_cause: with the knee's range less the hip's at the seed's 0.33 rad (1.53 Hz, within 10 %) and the knee
+    9 % short (in its 20 % band), the hip's range 0.29 rad (-20 %) is the knee's shortfall x 1.9 and the turn's extra
+    0.02 rad; a hip short on its own (the difference 0.44 rad, +33 %) or a knee out of its band has no such cause."""
+    r = realism()
+    said = r.hip_range_cause(1.53, {"rom": [0.89, 0.64, 0.29]})
+    assert "is 0.35 rad against the seed's 0.33 (+6%)" in said and "gives -16% at the hip" in said
+    assert "the turn's +0.02 rad -5%" in said
+    assert r.hip_range_cause(1.53, {"rom": [0.89, 0.64, 0.20]}) is None
+    assert r.hip_range_cause(1.53, {"rom": [0.89, 0.50, 0.16]}) is None  # knee -29 %
+
+
 def test_issue17_rule_row_marks_the_same_cells():
     """bench/simulator_issue17.py's rule row marks a cell out with the cause simulator_realism measures, no other."""
     issue17, r = bench_module("simulator_issue17"), realism()
@@ -98,3 +110,5 @@ def test_issue17_rule_row_marks_the_same_cells():
     hip = {"hip_exc_m": 0.6 * r.SEED_TABLE1[2.2]["hip_exc_m"], "grf_bw": 3.5,
            "com_drop_m": r.newton_com_drop(2.2, 0.282, 3.5)[1]}
     assert issue17.cause_mark("hip vertical excursion (m)", 2.2, hip) == " (cause: simulator_realism.OUT_CAUSES)"
+    rom = {"rom": [0.89, 0.64, 0.29]}
+    assert issue17.cause_mark("hip range of flexion (rad)", 1.53, rom) == " (cause measured: simulator_realism.hip_range_cause)"
