@@ -500,8 +500,8 @@ def main() -> None:
     parser.add_argument("--calibrated", action="store_true",
                         help="with --hopper seed-like: start from the calibrated hop instead (no stored hop, no feedback)")
     parser.add_argument("--find-orbits", action="store_true",
-                        help="find the stored periodic hops (find_seed_like_orbits); --write writes them into "
-                             "scenarios.SEED_LIKE_LOSSLESS_HOPS_FILE")
+                        help="find the stored periodic hops (2.2 Hz: find_newton_orbits, the lower laws: "
+                             "find_symmetric_orbits); --write writes them into scenarios.SEED_LIKE_LOSSLESS_HOPS_FILE")
     parser.add_argument("--scan-turning-points", type=float, metavar="HZ",
                         help="random turning points of symmetric hops at this law frequency (scan_turning_points)")
     parser.add_argument("--scan-count", type=int, default=6, help="with --scan-turning-points: how many")
