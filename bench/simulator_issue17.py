@@ -79,6 +79,7 @@ from simulator_realism import (  # noqa: E402  (a bench next to this one)
     OUT_CAUSES,
     SEED_TABLE1,
     binding_cells,
+    cause_function,
     cell_cause,
     replace_between_markers,
     summarise,
@@ -325,9 +326,7 @@ def cause_mark(name: str, freq_hz: float, realism: dict) -> str:
     """A mark after a cell out whose cause bench/simulator_realism.py gives (:func:`simulator_realism.cell_cause`,
     measured per cell, or the quantity's ``OUT_CAUSES``); the cause itself is printed there."""
     if cell_cause(name, freq_hz, realism):
-        measured = ("law_moment_cause" if "max moment" in name
-                    else "hip_range_cause" if "range of flexion" in name else "hip_excursion_cause")
-        return f" (cause measured: simulator_realism.{measured})"
+        return f" (cause measured: simulator_realism.{cause_function(name).__name__})"
     return " (cause: simulator_realism.OUT_CAUSES)" if name in OUT_CAUSES else ""
 
 

@@ -477,37 +477,44 @@ def hip_range_cause(freq_hz: float, result: dict) -> str | None:
             f"{-turn_extra / seed_hip:+.0%} (simulator_realism.hip_range_cause)")
 
 
-def cell_cause(name: str, freq_hz: float, result: dict) -> str | None:
-    """The cause measured for one binding cell out of band (``name`` as :func:`binding_cells` names it, ``result``
-    :func:`measure`'s figures at ``freq_hz``): :func:`law_moment_cause` for a maximal moment,
-    :func:`hip_excursion_cause` for the hip's excursion, :func:`hip_range_cause` for its range of flexion, else None."""
+def cause_function(name: str):
+    """The function that measures the cause of a binding cell out of band for quantity ``name`` (as
+    :func:`binding_cells` names it): :func:`hip_excursion_cause`, :func:`hip_range_cause`, :func:`law_moment_cause`
+    for a maximal moment, else None."""
     if name.startswith("hip vertical excursion"):
-        return hip_excursion_cause(freq_hz, result)
+        return hip_excursion_cause
     if name.startswith("hip range of flexion"):
-        return hip_range_cause(freq_hz, result)
-    if "max moment" not in name:
-        return None
-    joint = JOINT_NAMES.index(name.split()[0])
-    return law_moment_cause(freq_hz, joint, result["mmax"][joint], result["rom"][joint])
+        return hip_range_cause
+    return law_moment_cause if "max moment" in name else None
+
+
+def cell_cause(name: str, freq_hz: float, result: dict) -> str | None:
+    """The cause measured for one binding cell out of band (``result``: :func:`measure`'s figures at ``freq_hz``) by
+    :func:`cause_function`'s function, or None."""
+    measure = cause_function(name)
+    if measure is law_moment_cause:
+        joint = JOINT_NAMES.index(name.split()[0])
+        return law_moment_cause(freq_hz, joint, result["mmax"][joint], result["rom"][joint])
+    return None if measure is None else measure(freq_hz, result)
 
 
 def out_cells(results: dict) -> list[str]:
     """One line per quantity with binding cells outside their band: the cells and the causes, measured per cell
     (:func:`cell_cause`) or, for the cells without one, the quantity's :data:`OUT_CAUSES` entry."""
-    out: dict[str, list[tuple[str, str | None]]] = {}
+    out: dict[str, list[tuple[float, float, str | None]]] = {}
     bands = {}
     for name, f, sim, seed, band in binding_cells(results):
         if np.isfinite(sim) and abs(sim / seed - 1.0) > band:
-            out.setdefault(name, []).append((f"{f:.2f} Hz {sim / seed - 1.0:+.0%}", cell_cause(name, f, results[f])))
+            out.setdefault(name, []).append((f, sim / seed - 1.0, cell_cause(name, f, results[f])))
             bands[name] = band
     lines = []
     for name, cells in out.items():
-        causes = [c for _, c in cells if c]
-        rest = [cell.split(" Hz")[0] + " Hz" for cell, c in cells if not c]
+        causes = [c for _, _, c in cells if c]
+        rest = ", ".join(f"{f:.2f} Hz" for f, _, c in cells if not c)
         if rest:
-            causes.append(f"{', '.join(rest)}: {OUT_CAUSES[name]}" if name in OUT_CAUSES else f"{', '.join(rest)} not found")
-        lines.append(f"- OUT {name} (band {bands[name]:.0%}) at {', '.join(cell for cell, _ in cells)}: cause: "
-                     + "; ".join(causes))
+            causes.append(f"{rest}: {OUT_CAUSES[name]}" if name in OUT_CAUSES else f"{rest} not found")
+        lines.append(f"- OUT {name} (band {bands[name]:.0%}) at {', '.join(f'{f:.2f} Hz {d:+.0%}' for f, d, _ in cells)}"
+                     ": cause: " + "; ".join(causes))
     return lines
 
 
