@@ -78,6 +78,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simulator_realism import (  # noqa: E402  (a bench next to this one)
     OUT_CAUSES,
     SEED_TABLE1,
+    TABLE1_TRIAL_HOPS,
     binding_cells,
     cause_function,
     cell_cause,
@@ -223,7 +224,7 @@ class FrequencyMeasure:
     energy: dict = field(default_factory=dict)  # the truth's per-hop budget: flight_rel, push_off_j (mean, min, max)
 
 
-def measure_frequency(freq_hz: float, options: dict, hops: int = 10, seed: int = 1,
+def measure_frequency(freq_hz: float, options: dict, hops: int = TABLE1_TRIAL_HOPS, seed: int = 1,
                       surface: str = "hard") -> FrequencyMeasure:
     """Simulate, analyse and fit one noise-free trial of ``options`` (``simulate_recording`` keywords)."""
     try:
@@ -405,7 +406,7 @@ def seed001_rows(options: dict, freqs=FREQS, keep_pad: bool = False) -> list[Row
     return rows
 
 
-def criteria(options: dict, hops: int = 10, seed: int = 1, surface: str = "hard", freqs=FREQS,
+def criteria(options: dict, hops: int = TABLE1_TRIAL_HOPS, seed: int = 1, surface: str = "hard", freqs=FREQS,
              seed001: bool = True, seed001_keep_pad: bool = False) -> tuple[list[Row], dict]:
     """All rows for ``options`` and the measures by frequency (``freqs``, ``seed001``: a partial table)."""
     measures = {f: measure_frequency(f, options, hops, seed, surface) for f in freqs}
