@@ -7,6 +7,8 @@ Usage::
     nice -n 19 .venv/bin/python bench/simulator_issue17_search.py --a-min 0.9 --surface rigid --pad 10,2
     nice -n 19 .venv/bin/python bench/simulator_issue17_search.py --hopper seed-like --surface rigid --a-min 0.9 \
         --hops 10 --push-weights 1,-0.2,0.3 --save /tmp/law.json    # the preset with other push-off shares
+    nice -n 10 .venv/bin/python bench/simulator_issue17_search.py --hopper seed-like --surface rigid --a-min 0.9 \
+        --hops 10 --nominal --save /tmp/law.json    # calibrated on the nominal trial (no hop-to-hop variability)
 
 The option set is bench/simulator_issue17.py's variant (its flags, ``add_variant_arguments`` / ``variant_options``:
 ``--hopper``, ``--surface``, ``--pad MM,N``, ``--push-timing``, ``--trunk``, ``--posture``, ``--push-weights``, ...),
@@ -57,14 +59,16 @@ def options_for(args: argparse.Namespace, a_min: float) -> dict:
 
 
 def search_one(options: dict, a_min: float, iterations: int, tolerance: float, surface: str = "hard",
-               hops: int = 6) -> dict:
+               hops: int = 6, nominal: bool = False) -> dict:
     """Calibrate the law at every frequency for these options (bell floor a_min), then measure issue 17's criteria
-    with it."""
+    with it; ``nominal``: the calibration's trials without hop-to-hop variability (the criteria's keep it)."""
     scales, calibration_dev, notes = {}, {}, []
+    calibration_options = dict(options, variability=False) if nominal else options
     for f in FREQS:
         t0 = time.perf_counter()
         errors: list[str] = []
-        cal = calibrate_law_scale(f, options, n_hops=hops, iterations=iterations, tolerance=tolerance, surface=surface,
+        cal = calibrate_law_scale(f, calibration_options, n_hops=hops, iterations=iterations, tolerance=tolerance,
+                                  surface=surface,
                                   on_step=lambda _scale, _fitted, error, sink=errors: sink.append(error) if error else None)
         scales[f] = np.round(cal.scale, 6)
         calibration_dev[f] = worst_deviation(cal.fitted, table2_k(f))
@@ -101,6 +105,9 @@ def main() -> None:
     parser.add_argument("--tolerance", type=float, default=0.1)
     parser.add_argument("--hops", type=int, default=6,
                         help="hops of the calibration's trials (default 6; the criteria's trials have 10)")
+    parser.add_argument("--nominal", action="store_true",
+                        help="calibrate on trials without hop-to-hop variability (the hop a trial seed scatters around; "
+                             "session 34, bench/simulator_trial_seeds.py), not on trial seed 1's")
     parser.add_argument("--save", metavar="PATH",
                         help="write the law found (the last a_min's) as JSON, for simulator_issue17.py --law-scale-file")
     args = parser.parse_args()
@@ -114,7 +121,7 @@ def main() -> None:
     for a_min in (float(v) for v in args.a_min.split(",")):
         t0 = time.perf_counter()
         options = options_for(args, a_min)
-        r = search_one(options, a_min, args.iterations, args.tolerance, args.surface, args.hops)
+        r = search_one(options, a_min, args.iterations, args.tolerance, args.surface, args.hops, args.nominal)
         results.append(r)
         print(f"a_min {a_min:g} ({time.perf_counter() - t0:.0f} s):")
         for n in r["notes"]:
