@@ -13,8 +13,8 @@ Nothing here is written into a table: it says how far one trial's verdict carrie
 
 Usage::
 
-    nice -n 10 .venv/bin/python bench/simulator_trial_seeds.py              # the preset, seeds 1-8, both cores
-    nice -n 10 .venv/bin/python bench/simulator_trial_seeds.py --seeds 4 --workers 1
+    nice -n 10 .venv/bin/python bench/simulator_trial_seeds.py              # the preset, seeds 1-8, embedded cluster
+    nice -n 10 .venv/bin/python bench/simulator_trial_seeds.py --seeds 4 --scheduler serial
     nice -n 10 .venv/bin/python bench/simulator_trial_seeds.py --seeds 1 --stances 1.53   # stance by stance
     nice -n 10 .venv/bin/python bench/simulator_trial_seeds.py --law-scale-file law.json   # a variant (issue 17's flags)
 """
@@ -22,10 +22,8 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import multiprocessing as mp
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import simulator_issue17 as s17  # noqa: E402  (benches next to this one)
 from simulator_realism import SEED_TABLE1, TABLE1_TRIAL_HOPS, binding_cells  # noqa: E402
 
+from hop_impedance.batch.runner import cluster_map  # noqa: E402
 from hop_impedance.impedance.seed_findings import fig7_line  # noqa: E402
 from hop_impedance.simulation.fit_calibration import table2_k  # noqa: E402
 
@@ -47,23 +46,20 @@ SEED_SUBJECTS = 8
 NOMINAL = 0
 
 
-def _measure(job: tuple[dict, str, float, int]) -> tuple[tuple[float, int], s17.FrequencyMeasure]:
-    """One noise-free trial (bench/simulator_issue17.py's measure_frequency) of ``options`` on ``surface``; trial seed
-    :data:`NOMINAL`: without hop-to-hop variability."""
-    options, surface, freq, seed = job
-    if seed == NOMINAL:
-        options = dict(options, variability=False)
-    return (freq, seed), s17.measure_frequency(freq, options, TABLE1_TRIAL_HOPS, seed, surface)
+def trial_options(options: dict, seed: int) -> dict:
+    """``simulate_recording`` options of trial ``seed``: :data:`NOMINAL` without hop-to-hop variability."""
+    return dict(options, variability=False) if seed == NOMINAL else options
 
 
-def measure_seeds(options: dict, surface: str, seeds: list[int], workers: int) -> dict[int, dict[float, s17.FrequencyMeasure]]:
-    """{trial seed: {frequency: measure}}, the trials spread over ``workers`` processes."""
+def _measure(options: dict, surface: str, freq: float, seed: int) -> s17.FrequencyMeasure:
+    """One noise-free trial (bench/simulator_issue17.py's measure_frequency) of ``options`` on ``surface``."""
+    return s17.measure_frequency(freq, trial_options(options, seed), TABLE1_TRIAL_HOPS, seed, surface)
+
+
+def measure_seeds(options: dict, surface: str, seeds: list[int], scheduler: str) -> dict[int, dict[float, s17.FrequencyMeasure]]:
+    """{trial seed: {frequency: measure}}, one task per trial (``cluster_map``: 'serial', 'local' or an address)."""
     jobs = [(options, surface, f, s) for s in seeds for f in s17.FREQS]
-    if workers > 1:
-        with ProcessPoolExecutor(workers, mp_context=mp.get_context("fork")) as pool:
-            done = dict(pool.map(_measure, jobs))
-    else:
-        done = dict(map(_measure, jobs))
+    done = dict(zip(((f, s) for _, _, f, s in jobs), cluster_map(_measure, jobs, mode=scheduler)))
     return {s: {f: done[(f, s)] for f in s17.FREQS} for s in seeds}
 
 
@@ -75,8 +71,8 @@ def stance_lines(options: dict, surface: str, freq: float, seed: int) -> list[st
     from hop_impedance.simulation.sensors import SensorConfig, noise_free
     from hop_impedance.simulation.simulate import simulate_recording
 
-    trial = dict(options, variability=False) if seed == NOMINAL else options
-    rec, _ = simulate_recording(freq, surface, TABLE1_TRIAL_HOPS, seed=seed, sensors=noise_free(SensorConfig()), **trial)
+    rec, _ = simulate_recording(freq, surface, TABLE1_TRIAL_HOPS, seed=seed, sensors=noise_free(SensorConfig()),
+                                **trial_options(options, seed))
     analysis = analyze_recording(rec)
     stances = [s for s in analysis.stances if s.joints is not None][1:]  # the fits' stances: after the first
     lines = [f"{freq:g} Hz, trial {'nominal' if seed == NOMINAL else f'seed {seed}'}: stance, ranges of flexion "
@@ -128,16 +124,18 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=SEED_SUBJECTS, help=f"trial seeds 1..N (default {SEED_SUBJECTS})")
     parser.add_argument("--stances", type=float, default=None, metavar="F",
                         help="also each stance's ranges of flexion and ankle fit at F Hz, nominal trial and seed 1")
-    parser.add_argument("--workers", type=int, default=2, help="processes (default 2, this machine's cores)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", default="local",
+                        help="one Dask task per trial: 'local' (embedded cluster, default), tcp://HOST:8786, or 'serial' "
+                             "(this process)")
     args = parser.parse_args()
-    if args.seeds < 1 or args.workers < 1:
-        parser.error("--seeds and --workers: at least 1")
+    if args.seeds < 1:
+        parser.error("--seeds: at least 1")
     try:
         options, setup = s17.variant_options(args)
     except (argparse.ArgumentTypeError, ValueError) as exc:
         parser.error(str(exc))
     t0 = time.perf_counter()
-    per_seed = measure_seeds(options, args.surface, [NOMINAL, *range(1, args.seeds + 1)], args.workers)
+    per_seed = measure_seeds(options, args.surface, [NOMINAL, *range(1, args.seeds + 1)], args.scheduler)
     nominal = per_seed.pop(NOMINAL)
     print(f"{setup}, surface {args.surface}; noise-free {TABLE1_TRIAL_HOPS}-hop trials:")
     print("| trial seed | rows passed (less seed 001's) | binding cells out | Fig. 7 r^2 | 1.53 Hz hip range "
@@ -150,7 +148,7 @@ def main() -> None:
     if args.stances is not None:
         for seed in (NOMINAL, 1):
             print("\n".join(stance_lines(options, args.surface, args.stances, seed)))
-    print(f"(the nominal trial and {args.seeds} trial seeds x {len(s17.FREQS)} frequencies on {args.workers} processes: "
+    print(f"(the nominal trial and {args.seeds} trial seeds x {len(s17.FREQS)} frequencies, scheduler {args.scheduler}: "
           f"{time.perf_counter() - t0:.0f} s)")
 
 
