@@ -24,6 +24,8 @@ setup(
     install_requires=[
         "numpy>=1.24",
         "scipy>=1.11",
+        # the stance ODE's compiled equations of motion (simulation.dynamics)
+        "numba>=0.60",
         "osqp>=1.0",
         "mcap>=1.2",
         "mcap-ros2-support>=0.5",

@@ -24,6 +24,9 @@ where ``dJ_i/dt g' = -sum_{j<i} L_j q_j'^2 e(q_j) - q_i'^2 (a_i e + b_i n)(q_i)`
 :func:`equations_of_motion` evaluates these sums in closed form, as constant 4 x 4 coefficients of
 ``cos(q_k - q_j)`` and ``sin(q_k - q_j)`` (:class:`EomConstants`; 2.2x faster than summing the
 Jacobians, which the tests still do to check it: `bench/bench_stance_dynamics.py`).
+:func:`accelerations`, the stance ODE's inner loop, runs the same closed form compiled by numba
+(``_eom_compiled``, ``_accelerations_compiled``: 44 -> 6 us a call, the stance 1.5x faster, ``discover`` 1.6x;
+``test_sim_dynamics`` checks it against :func:`equations_of_motion` solved by LAPACK).
 Joint moments M_j are extensor positive and do virtual work ``-M_j d(rho_j)``
 (ankle rho1 = q1 - q2 + alpha, knee rho2 = q3 - q2 + pi, hip rho3 = q3 - q4 + pi),
 so ``Q_joints = -D^T M`` with ``D = d(rho)/dq`` (constant, 3 x 4). The ground
@@ -40,8 +43,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from functools import cached_property
 
+import numba
 import numpy as np
-from scipy.linalg import lapack
 
 from hop_impedance.biomech.body_model import BodyModel
 from hop_impedance.recording import GRAVITY_M_S2
@@ -347,19 +350,91 @@ def accelerations(
         Generalized constraint forces (non-zero only on fixed coordinates);
         on ``x_toe``/``z_toe`` these are the ground force components (N).
     """
-    mass, bias, gravity = equations_of_motion(chain, g, gd)
-    rhs = gravity + joint_generalized_forces(moments_nm) - bias
-    rhs[0:2] += toe_force_n
-    gdd = np.zeros(N_COORDS)
-    idx = np.flatnonzero(free)
-    # LAPACK's gesv, as np.linalg.solve calls it, without numpy's per-call checks (4.8 -> 1.2 us for 5 x 5)
-    _, _, solution, info = lapack.dgesv(mass[idx][:, idx], rhs[idx])
-    gdd[idx] = solution
+    k = chain.eom_constants
+    gdd, constraint, info = _accelerations_compiled(
+        k.cos_terms, k.sin_terms, k.cos_products, k.first_moments, k.total_mass_kg, chain.gravity_m_s2,
+        np.asarray(g, float), np.asarray(gd, float), np.asarray(moments_nm, float), float(toe_force_n[0]),
+        float(toe_force_n[1]), np.asarray(free, bool))
     if info != 0:
-        raise np.linalg.LinAlgError(f"singular mass matrix (LAPACK dgesv info {info})")
-    constraint = mass @ gdd - rhs
-    constraint[free] = 0.0
+        raise np.linalg.LinAlgError(f"singular mass matrix (pivot {info} is zero)")
     return gdd, constraint
+
+
+@numba.njit(cache=True)
+def _eom_compiled(cos_terms, sin_terms, cos_products, w, total_mass, grav, q, qd, moments, fx, fz):  # noqa: PLR0913
+    """M and the right-hand side ``Q_gravity + Q_joints + Q_ground - h`` of :func:`equations_of_motion`, compiled.
+
+    The same closed form (:class:`EomConstants`), written as loops that numba compiles: one call costs about 4 us
+    against 43 us for the numpy one (`bench/bench_stance_dynamics.py`), which is most of the stance ODE's
+    right-hand side, the inner loop of every simulated trial and of ``discover`` (issue 16's speed).
+    ``test_sim_dynamics`` checks it against :func:`equations_of_motion` and :func:`joint_generalized_forces`.
+    """
+    mass = np.zeros((6, 6))
+    rhs = np.zeros(6)
+    mass[0, 0] = total_mass
+    mass[1, 1] = total_mass
+    rhs[0] = fx
+    rhs[1] = fz - grav * total_mass
+    for j in range(4):
+        c, s, qd2 = np.cos(q[j]), np.sin(q[j]), qd[j] * qd[j]
+        mass[0, 2 + j] = mass[2 + j, 0] = w[j, 0] * c - w[j, 1] * s
+        mass[1, 2 + j] = mass[2 + j, 1] = w[j, 0] * s + w[j, 1] * c
+        rhs[0] += (w[j, 1] * c + w[j, 0] * s) * qd2
+        rhs[1] -= (w[j, 0] * c - w[j, 1] * s) * qd2
+    for j in range(4):
+        bias = 0.0
+        for k in range(4):
+            cd, sd = np.cos(q[k] - q[j]), np.sin(q[k] - q[j])
+            mass[2 + j, 2 + k] = cos_terms[j, k] * cd + sin_terms[j, k] * sd
+            bias += (sin_terms[j, k] * cd - cos_products[j, k] * sd) * qd[k] * qd[k]
+        rhs[2 + j] = -grav * mass[1, 2 + j] - bias
+    # Q_joints = -D^T M (JOINT_JACOBIAN): ankle rho = q1 - q2, knee q3 - q2, hip q3 - q4
+    rhs[2] -= moments[0]
+    rhs[3] += moments[0] + moments[1]
+    rhs[4] -= moments[1] + moments[2]
+    rhs[5] += moments[2]
+    return mass, rhs
+
+
+@numba.njit(cache=True)
+def _accelerations_compiled(cos_terms, sin_terms, cos_products, w, total_mass, grav, g, gd, moments, fx, fz, free):  # noqa: PLR0913
+    """(gdd, constraint, info) of :func:`accelerations`: Gaussian elimination with partial pivoting on the free block."""
+    mass, rhs = _eom_compiled(cos_terms, sin_terms, cos_products, w, total_mass, grav, g[2:], gd[2:], moments, fx, fz)
+    idx = np.flatnonzero(free)
+    n = idx.size
+    a = np.empty((n, n))
+    b = np.empty(n)
+    for i in range(n):
+        b[i] = rhs[idx[i]]
+        for k in range(n):
+            a[i, k] = mass[idx[i], idx[k]]
+    info = 0
+    for col in range(n):
+        piv = col + np.argmax(np.abs(a[col:, col]))
+        if a[piv, col] == 0.0:
+            info = col + 1
+            break
+        if piv != col:
+            for k in range(n):
+                a[col, k], a[piv, k] = a[piv, k], a[col, k]
+            b[col], b[piv] = b[piv], b[col]
+        for i in range(col + 1, n):
+            f = a[i, col] / a[col, col]
+            for k in range(col, n):
+                a[i, k] -= f * a[col, k]
+            b[i] -= f * b[col]
+    gdd = np.zeros(6)
+    if info == 0:
+        for i in range(n - 1, -1, -1):
+            acc = b[i]
+            for k in range(i + 1, n):
+                acc -= a[i, k] * gdd[idx[k]]
+            gdd[idx[i]] = acc / a[i, i]
+    constraint = mass @ gdd - rhs
+    for i in range(6):
+        if free[i]:
+            constraint[i] = 0.0
+    return gdd, constraint, info
 
 
 def mechanical_energy_j(chain: Chain, g: np.ndarray, gd: np.ndarray) -> tuple[float, float]:
@@ -374,6 +449,18 @@ def com_velocity(chain: Chain, g: np.ndarray, gd: np.ndarray) -> np.ndarray:
     """Whole-body COM velocity ``[vx, vz]`` (m/s), shape (2,)."""
     jac = com_jacobians(chain, g[2:])
     return np.einsum("i,iak,k->a", chain.mass_kg, jac, gd) / chain.total_mass_kg
+
+
+def com_height_above_contact(chain: Chain, q: np.ndarray) -> float:
+    """Body COM height above the chain's origin (the toe) at segment angles ``q`` (m), ``body_com(g)[1] - g[1]``.
+
+    From the first moments of :class:`EomConstants`: the COM's offset from the toe is ``sum_j R(q_j) J90 w_j / m``,
+    whose z is ``(w_j1 sin q_j - w_j0 cos q_j) / m``; a few flops, for the stance's collapse event at every solver step
+    (``body_com`` builds every segment's point).
+    """
+    k = chain.eom_constants
+    w = k.first_moments
+    return float(w[:, 1] @ np.sin(q) - w[:, 0] @ np.cos(q)) / k.total_mass_kg
 
 
 def com_offset_jacobian(chain: Chain, q: np.ndarray) -> np.ndarray:

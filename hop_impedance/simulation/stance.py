@@ -43,7 +43,7 @@ from hop_impedance.simulation.dynamics import (
     JOINT_JACOBIAN,
     Chain,
     accelerations,
-    body_com,
+    com_height_above_contact,
     com_velocity,
     mechanical_energy_j,
 )
@@ -208,7 +208,8 @@ class _StanceSystem:
         sign = self.slide_sign(t) if sign is None else sign
         rho = JOINT_JACOBIAN @ g[2:] + self.rho_offset
         omega = JOINT_JACOBIAN @ gd[2:]
-        moments = self.law.moments_nm(np.float64(t), rho, omega, s, self.ref)
+        t64 = np.float64(t)
+        moments = self.law.moments_nm(t64, rho, omega, s, self.ref)
         if self.trunk is not None:
             moments = moments + np.array([0.0, 0.0, self.trunk.hip_moment_nm(g[5], gd[5], self.q4_touchdown)])
         fz = self.ground.force_n(g[1], gd[1])
@@ -219,7 +220,7 @@ class _StanceSystem:
             assert self.mu is not None  # sliding phases exist only with friction (see _integrate_friction_phases)
             fx = sign * self.mu * fz
             gdd, _ = accelerations(self.chain, g, gd, moments, np.array([fx, fz]), SLIDE_FREE)
-        rates = self.law.state_rates(np.float64(t), rho, omega, s, self.ref)
+        rates = self.law.state_rates(t64, rho, omega, s, self.ref)
         return g, gd, gdd, np.array([fx, fz]), moments, rho, omega, s, rates
 
     def rhs_for(self, sign: int):
@@ -251,9 +252,11 @@ class _PhaseState:
         """Full state(s) from integrated state(s), shape (n,) or (n, k)."""
         if self.sign != 0:
             return y
-        full = np.zeros((self.full_size,) + np.shape(y)[1:])
-        full[self.index] = y
+        full = np.empty((self.full_size,) + np.shape(y)[1:])
         full[0] = self.x_toe_m
+        full[1:6] = y[0:5]
+        full[6] = 0.0
+        full[7:] = y[5:]
         return full
 
     def wrap(self, fun):
@@ -266,6 +269,9 @@ class _PhaseState:
         return wrapped
 
     def rhs(self, full_rhs):
+        if self.sign != 0:
+            return full_rhs
+
         def rhs(t, y):
             return full_rhs(t, self.expand(y))[self.index]
         return rhs
@@ -415,7 +421,7 @@ def _stance_events(system: _StanceSystem, collapse_height_m: float) -> _StanceEv
         return y[1] if t >= MIN_STANCE_S else -1.0
 
     def collapse(t, y):
-        return body_com(chain, y[0:6])[1] - y[1] - collapse_height_m
+        return com_height_above_contact(chain, y[2:6]) - collapse_height_m
 
     def overflexion(t, y):  # a joint leaves the anatomical range
         rho = JOINT_JACOBIAN @ y[2:6] + system.rho_offset

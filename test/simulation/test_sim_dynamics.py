@@ -193,3 +193,43 @@ def test_closed_form_equations_of_motion_equal_the_jacobian_sums():
             gravity = -chain.gravity_m_s2 * weighted[:, 1, :].sum(axis=0)
             for ours, summed in zip(equations_of_motion(chain, g, gd), (mass, bias, gravity)):
                 np.testing.assert_allclose(ours, summed, rtol=0, atol=1e-12 * np.abs(summed).max())
+
+
+def test_compiled_accelerations_equal_the_numpy_equations_solved_by_lapack():
+    """accelerations' compiled kernel (numba, session 35) against M g'' = Q - h assembled from equations_of_motion and
+    joint_generalized_forces and solved by LAPACK's gesv, at random states, moments and forces, in both friction
+    modes (toe stuck: x_toe fixed, its constraint force returned; sliding: all six coordinates free)."""
+    from scipy.linalg import solve
+
+    from hop_impedance.simulation.dynamics import contact_ahead_of_toe_marker, joint_generalized_forces
+    from hop_impedance.simulation.stance import SLIDE_FREE
+
+    rng = np.random.default_rng(35)
+    for chain in (CHAIN, contact_ahead_of_toe_marker(CHAIN, 0.06)):
+        for free in (STANCE_FREE, SLIDE_FREE):
+            for _ in range(50):
+                g, gd = rng.normal(0, 2, 6), rng.normal(0, 5, 6)
+                gd[~free] = 0.0
+                moments, force = rng.normal(0, 200, 3), rng.normal(0, 900, 2)
+                mass, bias, gravity = equations_of_motion(chain, g, gd)
+                rhs = gravity + joint_generalized_forces(moments) - bias
+                rhs[:2] += np.where(free[:2], force, 0.0)
+                expected = np.zeros(6)
+                expected[free] = solve(mass[np.ix_(free, free)], rhs[free])
+                gdd, constraint = accelerations(chain, g, gd, moments, np.where(free[:2], force, 0.0), free)
+                np.testing.assert_allclose(gdd, expected, rtol=0, atol=1e-10 * np.abs(expected).max())
+                expected_constraint = np.where(free, 0.0, mass @ expected - rhs)
+                np.testing.assert_allclose(constraint, expected_constraint, rtol=0, atol=1e-9 * np.abs(rhs).max())
+                assert np.all(constraint[free] == 0.0)
+
+
+def test_com_height_from_first_moments_equals_the_segment_sum():
+    """com_height_above_contact (the collapse event's, from EomConstants' first moments) against body_com, which sums
+    every segment's COM point, on two bodies (the second with a foot COM off the toe-heel line)."""
+    from hop_impedance.simulation.dynamics import com_height_above_contact, contact_ahead_of_toe_marker
+
+    rng = np.random.default_rng(36)
+    for chain in (CHAIN, contact_ahead_of_toe_marker(CHAIN, 0.06)):
+        for _ in range(50):
+            g = rng.normal(0, 2, 6)
+            assert com_height_above_contact(chain, g[2:]) == pytest.approx(body_com(chain, g)[1] - g[1], abs=1e-14)
