@@ -6,7 +6,10 @@ Prints, on the seed subject's de Leva chain:
    (``sum m J^T J``, the formulation it replaced; test_sim_dynamics checks they agree to 1e-12);
 2. ``dynamics.accelerations`` (one solve of the stance's 5 free coordinates);
 3. ``stance.simulate_stance`` of one stance (Table 2 law at 2.2 Hz with b0, hard surface, LSODA,
-   300 samples), with the number of right-hand-side evaluations.
+   300 samples), with the number of right-hand-side evaluations;
+4. the same stance as ``discover`` simulates a held-out one: the reduced law k0 + k1 (rho - rho0) as the identified
+   law (``discovery.model.FittedLaw``) at ``forward_selection``'s tolerances, with its number of law states (none since
+   session 35; 21 before, which LSODA's finite-difference Jacobian paid for at every evaluation).
 Each figure is the median of ``--repeat`` timing runs; the load average is printed beside them.
 
 Usage: .venv/bin/python bench/bench_stance_dynamics.py [--repeat N]
@@ -80,7 +83,35 @@ def main() -> None:
           f"accelerations (5 free coordinates) {acc:.1f} us")
     print(f"one stance ({st.duration_s * 1e3:.0f} ms, {st.end_reason}): {per_stance / 1e3:.1f} ms, "
           f"{calls[0]} right-hand-side evaluations ({per_stance / calls[0]:.0f} us each incl. the solver)")
+    held_out_stance(td, args.repeat)
     print(f"load average (1 min) before {load0:.2f}, after {os.getloadavg()[0]:.2f}; median of {args.repeat} runs")
+
+
+def held_out_stance(td: stance.TouchdownState, repeat: int) -> None:
+    """Item 4 of the module docstring: one stance with the identified law, as forward_selection runs it."""
+    from hop_impedance.discovery import forward_selection as fs
+    from hop_impedance.discovery.model import FittedLaw, ModelSpec
+
+    law = FittedLaw(ModelSpec(effects=("angle_dependent_stiffness",)),
+                    np.array([[301.4, 948.2], [230.9, 884.8], [175.4, 894.8]]))
+    calls = [0]
+    original = stance.accelerations
+
+    def counted(*a, **k):
+        calls[0] += 1
+        return original(*a, **k)
+
+    def run():
+        return stance.simulate_stance(CHAIN, law, HARD, td, t_max_s=0.6, rtol=fs.RTOL, atol=fs.atol_of(law),
+                                      sample_times_s=np.linspace(0, 0.3, 300))
+
+    stance.accelerations = counted
+    st = run()
+    stance.accelerations = original
+    ms = per_call_us(run, 10, repeat) / 1e3
+    print(f"held-out stance as discover runs it (FittedLaw k0 + k1, {law.n_states} law states, rtol {fs.RTOL:g}, "
+          f"atol {fs.ATOL:g} / toe {fs.TOE_ATOL:g}; {st.duration_s * 1e3:.0f} ms, {st.end_reason}): {ms:.1f} ms, "
+          f"{calls[0]} right-hand-side evaluations")
 
 
 if __name__ == "__main__":

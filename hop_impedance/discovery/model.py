@@ -228,7 +228,7 @@ def angle_column(term: str, dr, held=None):
 
 
 def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None, w0=None, held=None) -> np.ndarray:
-    """Regressor matrix of one joint, shape (N, len(feature_names(spec))).
+    """Regressor matrix of one joint, shape (N, len(feature_names(spec))): :func:`feature_columns` side by side.
 
     Parameters
     ----------
@@ -245,8 +245,19 @@ def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None, w0
     held : ndarray, shape (N,), optional
         ``dr`` clipped to a range for the angle terms (:func:`angle_column`); None: the polynomial everywhere.
     """
+    out = feature_columns(spec, t_s, dr, dw, s_int, s_speed, tangent, w0, held)
+    dr = np.asarray(dr, float)
+    matrix = np.empty(dr.shape + (len(out),))  # what np.stack(out, axis=-1) returns, without its generic checks
+    for k, column in enumerate(out):
+        matrix[..., k] = column
+    return matrix
+
+
+def feature_columns(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None, w0=None, held=None) -> list:
+    """The regressors of :func:`features` (same arguments), one array per column in :func:`feature_names` order; a
+    column of time alone (activation, push) keeps ``t_s``'s shape, so a scalar time broadcasts over the joints."""
     t_s, dr, dw, s_int = np.asarray(t_s, float), np.asarray(dr, float), np.asarray(dw, float), np.asarray(s_int, float)
-    # only the columns the spec uses: the simulator builds this matrix at every step (FittedLaw.moments_nm)
+    # only the columns the spec uses: the simulator evaluates them at every step (FittedLaw.moments_nm)
     el = [dr if e == "k0" else angle_column(e, dr, held) if e in ("k1", "k2")
           else rate_column(spec, s_int, s_speed, dr, w0) for e in elastic_terms(spec)]
     out = list(el)
@@ -262,10 +273,7 @@ def features(spec: ModelSpec, t_s, dr, dw, s_int, s_speed=None, tangent=None, w0
         out += [dw, dw**2 / 2]
     if spec.has("active_push_off"):
         out.append(push_profile(t_s, spec.onset_s, spec.duration_s))
-    matrix = np.empty(dr.shape + (len(out),))  # what np.stack(out, axis=-1) returns, without its generic checks
-    for k, column in enumerate(out):
-        matrix[..., k] = column
-    return matrix
+    return out
 
 
 def stance_features(spec: ModelSpec, t_s, rho, omega) -> list[np.ndarray]:
@@ -328,34 +336,50 @@ class FittedLaw(ImpedanceLaw):
         """``dr`` clipped to :attr:`angle_range` (None without one)."""
         return None if self.angle_range is None else np.clip(dr, self.angle_range[:, 0], self.angle_range[:, 1])
 
-    #: ``S`` and ``S_speed`` per joint, then ``int g(t) dE_k`` per term of :data:`ELASTIC_ALL` and joint
-    #: (state ``6 + 3 m + j``; integrated always, used with a tangent-form activation).
-    n_states = 6 + 3 * len(ELASTIC_ALL)
+    @property
+    def n_states(self) -> int:
+        """``S`` and ``S_speed`` per joint, then ``int g(t) dE_k`` per term of :data:`ELASTIC_ALL` and joint (state
+        ``6 + 3 m + j``); integrated only when the moment reads them, with a rate term (``k3``) or a tangent-form
+        activation, else none. Session 35: LSODA's finite-difference Jacobian costs one right-hand side per state,
+        and the 21 states integrated always, unread by most models, took about 70 % of a held-out simulation's
+        right-hand sides (`bench/bench_stance_dynamics.py`)."""
+        tangent = self.spec.has("time_dependent_activation") and self.spec.activation_form == "tangent"
+        return 6 + 3 * len(ELASTIC_ALL) if tangent or "k3" in elastic_terms(self.spec) else 0
 
     def moments_nm(self, t_s, rho, omega, states, ref):  # noqa: D102
-        # all three joints in one call of features() (joint axis before the regressor axis): the same
+        # all three joints in one call of feature_columns() (joint axis before the regressor axis): the same
         # regressors as the fit; the simulator calls this at every step, so it is its hot path
         ref = self.reference or ref
         dr = np.asarray(rho, float) - ref.rho0_rad
         dw = np.asarray(omega, float) - ref.omega0_rad_s
         s = np.asarray(states, float)
-        if dr.ndim == 1 and np.ndim(t_s) == 0:  # one instant: a plain array is cheaper than a broadcast view
-            t = np.full(3, t_s, float)
-        else:
-            t = np.broadcast_to(np.asarray(t_s, float)[..., None], dr.shape)
-        tangent = None  # read by features() only with a tangent-form activation
+        one_instant = dr.ndim == 1 and np.ndim(t_s) == 0
+        # one instant: the time's columns (activation, push) broadcast over the joints as a scalar
+        t = t_s if one_instant else np.broadcast_to(np.asarray(t_s, float)[..., None], dr.shape)
+        tangent = None  # read by feature_columns() only with a tangent-form activation
         if self.spec.has("time_dependent_activation") and self.spec.activation_form == "tangent":
             tangent = np.swapaxes(s[..., 6:].reshape(s.shape[:-1] + (len(ELASTIC_ALL), 3)), -1, -2)
-        f = features(self.spec, t, dr, dw, s[..., 0:3], s[..., 3:6], tangent, ref.omega0_rad_s, self.held(dr))
-        return self.touchdown_moment_nm + np.einsum("...jk,jk->...j", f, self.coefficients)
+        columns = feature_columns(self.spec, t, dr, dw, s[..., 0:3], s[..., 3:6], tangent, ref.omega0_rad_s,
+                                  self.held(dr))
+        # the columns summed in order, the same operations at one instant (the simulator's call at every step, where
+        # a regressor matrix and einsum's dispatch cost more than the sum) and over a batch
+        total = self.coefficients[:, 0] * columns[0]
+        for coefficient, column in zip(self.coefficients.T[1:], columns[1:]):
+            total = total + coefficient * column
+        return self.touchdown_moment_nm + total
 
     def state_rates(self, t_s, rho, omega, states, ref):  # noqa: D102
         ref = self.reference or ref
         w = np.asarray(omega, float)
         w0 = ref.omega0_rad_s
-        rates = [(w - w0) * w, (np.abs(w) - np.abs(w0)) * w]
+        if not self.n_states:
+            return np.zeros(w.shape[:-1] + (0,))
         if not self.spec.has("time_dependent_activation"):  # the activation integrals stay 0
-            return np.concatenate(rates + [np.zeros(w.shape[:-1] + (3 * len(ELASTIC_ALL),))], axis=-1)
+            out = np.zeros(w.shape[:-1] + (self.n_states,))
+            out[..., 0:3] = (w - w0) * w
+            out[..., 3:6] = (np.abs(w) - np.abs(w0)) * w
+            return out
+        rates = [(w - w0) * w, (np.abs(w) - np.abs(w0)) * w]
         g = np.asarray(activation_modulation(self.spec, t_s), float)
         g = g[..., None] if g.ndim else g
         dr = np.asarray(rho, float) - ref.rho0_rad

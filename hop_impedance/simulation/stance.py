@@ -308,7 +308,7 @@ def simulate_stance(
     t_max_s: float = 1.0,
     *,
     rtol: float = DEFAULT_RTOL,
-    atol: float = DEFAULT_ATOL,
+    atol: float | np.ndarray = DEFAULT_ATOL,
     sample_times_s: np.ndarray | None = None,
     collapse_height_m: float = 0.3,
     friction_coefficient: float | None = None,
@@ -330,7 +330,7 @@ def simulate_stance(
     t_max_s : float
         Longest stance integrated (s).
     rtol, atol : float
-        ``solve_ivp`` tolerances.
+        ``solve_ivp`` tolerances; ``atol`` may be an array over the full ODE state (``[g, gd, law states]``).
     sample_times_s : ndarray, optional
         Times since touchdown at which to report (clipped to the stance); by
         default the solver's own steps.
@@ -449,7 +449,7 @@ class _PhasesRun:
 
 
 def _integrate_friction_phases(system: _StanceSystem, events: _StanceEvents, y: np.ndarray, t_max_s: float,
-                               rtol: float, atol: float, t_start_s: float = 0.0) -> _PhasesRun:
+                               rtol: float, atol: float | np.ndarray, t_start_s: float = 0.0) -> _PhasesRun:
     """Integrate stick and slide phases in turn until take-off, collapse or ``t_max_s``.
 
     Each phase is one :func:`_integrate_phase` on the coordinates free in it (:class:`_PhaseState`);
@@ -464,7 +464,8 @@ def _integrate_friction_phases(system: _StanceSystem, events: _StanceEvents, y: 
         phase_events = events.for_phase(sign, system.mu is not None)
         phase = _PhaseState(sign, y.size, float(y[0]))
         sol = _integrate_phase(phase.rhs(system.rhs_for(sign)), (t0, t_max_s), phase.reduce(y),
-                               [phase.wrap(e) for e in phase_events], rtol, atol)
+                               [phase.wrap(e) for e in phase_events], rtol,
+                               phase.reduce(atol) if isinstance(atol, np.ndarray) else atol)
         if sol.status == -1:
             raise RuntimeError(f"stance integration failed: {sol.message}")
         dense.append(float(sol.t[-1]), sol.sol, phase)
@@ -494,7 +495,8 @@ def _report_times(steps: list, sample_times_s: np.ndarray | None, t_end_s: float
     return times[(times >= t_start_s) & (times <= t_end_s)]
 
 
-def _integrate_phase(rhs, span: tuple[float, float], y0: np.ndarray, events: list, rtol: float, atol: float):
+def _integrate_phase(rhs, span: tuple[float, float], y0: np.ndarray, events: list, rtol: float,
+                     atol: float | np.ndarray):
     """``solve_ivp`` with LSODA; Radau if LSODA's event location fails.
 
     LSODA can return a zero-length step on which scipy's event root finder
