@@ -341,8 +341,8 @@ class FittedLaw(ImpedanceLaw):
         """``S`` and ``S_speed`` per joint, then ``int g(t) dE_k`` per term of :data:`ELASTIC_ALL` and joint (state
         ``6 + 3 m + j``); integrated only when the moment reads them, with a rate term (``k3``) or a tangent-form
         activation, else none. Session 35: LSODA's finite-difference Jacobian costs one right-hand side per state,
-        and the 21 states integrated always, unread by most models, took about 70 % of a held-out simulation's
-        right-hand sides (`bench/bench_stance_dynamics.py`)."""
+        and the 21 states integrated always, unread by most models, took 928 of a held-out stance's 1304 right-hand
+        sides (docs/discovery.md, Runtime, session 35)."""
         tangent = self.spec.has("time_dependent_activation") and self.spec.activation_form == "tangent"
         return 6 + 3 * len(ELASTIC_ALL) if tangent or "k3" in elastic_terms(self.spec) else 0
 

@@ -364,9 +364,9 @@ def accelerations(
 def _eom_compiled(cos_terms, sin_terms, cos_products, w, total_mass, grav, q, qd, moments, fx, fz):  # noqa: PLR0913
     """M and the right-hand side ``Q_gravity + Q_joints + Q_ground - h`` of :func:`equations_of_motion`, compiled.
 
-    The same closed form (:class:`EomConstants`), written as loops that numba compiles: one call costs about 4 us
-    against 43 us for the numpy one (`bench/bench_stance_dynamics.py`), which is most of the stance ODE's
-    right-hand side, the inner loop of every simulated trial and of ``discover`` (issue 16's speed).
+    The same closed form (:class:`EomConstants`), written as loops that numba compiles: with the solve,
+    :func:`accelerations` went from 43.8 to 5.8 us a call (`bench/bench_stance_dynamics.py`, session 35); it was most
+    of the stance ODE's right-hand side, the inner loop of every simulated trial and of ``discover`` (issue 16).
     ``test_sim_dynamics`` checks it against :func:`equations_of_motion` and :func:`joint_generalized_forces`.
     """
     mass = np.zeros((6, 6))
