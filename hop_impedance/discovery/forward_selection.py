@@ -62,7 +62,13 @@ from hop_impedance.discovery.measurement import MeasuredStance, MeasuredTrial, f
 from hop_impedance.discovery.model import EFFECT_NAMES, PAIR_SEPARATOR, FittedLaw, ModelSpec, members
 from hop_impedance.recording import Recording
 from hop_impedance.simulation.impedance_laws import TouchdownReference
-from hop_impedance.simulation.stance import StanceSimulation, StanceStart, TouchdownState, simulate_stance
+from hop_impedance.simulation.stance import (
+    StanceSimulation,
+    StanceStart,
+    TouchdownState,
+    simulate_stance,
+    state_atol,
+)
 
 ALPHA = 0.05
 #: Fewest usable stances for held-out testing.
@@ -81,11 +87,9 @@ RTOL, ATOL, TOE_ATOL = 1e-5, 1e-7, 1e-9
 
 
 def atol_of(law) -> np.ndarray:
-    """Absolute tolerances over the stance ODE's full state ``[g, gd, law states]``: :data:`TOE_ATOL` on the toe's
-    height and vertical velocity, :data:`ATOL` elsewhere."""
-    atol = np.full(12 + law.n_states, ATOL)
-    atol[[1, 7]] = TOE_ATOL
-    return atol
+    """Absolute tolerances of a held-out stance's ODE: :data:`TOE_ATOL` on the toe's height and vertical velocity,
+    :data:`ATOL` elsewhere (``stance.state_atol``)."""
+    return state_atol(law, ATOL, TOE_ATOL)
 #: Net-joint-work scale: share of the work the joints absorb per measured stance.
 WORK_SCALE = 1.0
 #: Flight-force scale: share of body weight (the mean raw force of the flight before each stance).

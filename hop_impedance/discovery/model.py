@@ -52,6 +52,7 @@ Ground and sensors
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -336,7 +337,7 @@ class FittedLaw(ImpedanceLaw):
         """``dr`` clipped to :attr:`angle_range` (None without one)."""
         return None if self.angle_range is None else np.clip(dr, self.angle_range[:, 0], self.angle_range[:, 1])
 
-    @property
+    @cached_property  # read at every right-hand side (state_rates)
     def n_states(self) -> int:
         """``S`` and ``S_speed`` per joint, then ``int g(t) dE_k`` per term of :data:`ELASTIC_ALL` and joint (state
         ``6 + 3 m + j``); integrated only when the moment reads them, with a rate term (``k3``) or a tangent-form

@@ -41,6 +41,7 @@ from hop_impedance.biomech.joint_angles import joint_angles
 from hop_impedance.ode_events import TerminalEvent
 from hop_impedance.simulation.dynamics import (
     JOINT_JACOBIAN,
+    N_COORDS,
     Chain,
     accelerations,
     com_height_above_contact,
@@ -252,11 +253,9 @@ class _PhaseState:
         """Full state(s) from integrated state(s), shape (n,) or (n, k)."""
         if self.sign != 0:
             return y
-        full = np.empty((self.full_size,) + np.shape(y)[1:])
+        full = np.zeros((self.full_size,) + np.shape(y)[1:])
+        full[self.index] = y
         full[0] = self.x_toe_m
-        full[1:6] = y[0:5]
-        full[6] = 0.0
-        full[7:] = y[5:]
         return full
 
     def wrap(self, fun):
@@ -330,7 +329,7 @@ def simulate_stance(
     t_max_s : float
         Longest stance integrated (s).
     rtol, atol : float
-        ``solve_ivp`` tolerances; ``atol`` may be an array over the full ODE state (``[g, gd, law states]``).
+        ``solve_ivp`` tolerances; ``atol`` may be an array over the full ODE state (:func:`state_atol`).
     sample_times_s : ndarray, optional
         Times since touchdown at which to report (clipped to the stance); by
         default the solver's own steps.
@@ -406,6 +405,14 @@ class _StanceEvents:
             self.sticks.direction = sign
             events.append(self.slips if sign == 0 else self.sticks)
         return events
+
+
+def state_atol(law: ImpedanceLaw, atol: float, toe_atol: float) -> np.ndarray:
+    """Absolute tolerances over :func:`simulate_stance`'s full ODE state (:class:`_StanceSystem`'s ``y``):
+    ``toe_atol`` on the toe's height and vertical velocity, ``atol`` on the rest."""
+    tolerances = np.full(2 * N_COORDS + law.n_states, atol)
+    tolerances[[1, N_COORDS + 1]] = toe_atol  # z_toe, zd_toe
+    return tolerances
 
 
 def _stance_events(system: _StanceSystem, collapse_height_m: float) -> _StanceEvents:
