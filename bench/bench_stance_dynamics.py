@@ -53,6 +53,22 @@ def per_call_us(fun, calls: int, repeat: int) -> float:
     return 1e6 * float(np.median(times))
 
 
+def counted_run(run):
+    """``run()``'s result and how many right-hand sides (calls of ``stance.accelerations``) it evaluated."""
+    calls = [0]
+    original = stance.accelerations
+
+    def counted(*a, **k):
+        calls[0] += 1
+        return original(*a, **k)
+
+    stance.accelerations = counted
+    try:
+        return run(), calls[0]
+    finally:
+        stance.accelerations = original
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
@@ -67,22 +83,14 @@ def main() -> None:
                       20000, args.repeat)
     law = Eq3Law(k0=[301.4, 230.9, 175.4], k1=[948.2, 884.8, 894.8], b0=0.5)
     td = touchdown_state(CHAIN, touchdown_posture(CHAIN, np.array(DEFAULT_TOUCHDOWN_RHO)), np.array([0.05, -1.0]), 0.0)
-    calls = [0]
-    original = stance.accelerations
-
-    def counted(*a, **k):
-        calls[0] += 1
-        return original(*a, **k)
-
-    stance.accelerations = counted
-    st = stance.simulate_stance(CHAIN, law, HARD, td, t_max_s=0.6, sample_times_s=np.linspace(0, 0.3, 300))
-    stance.accelerations = original
+    st, calls = counted_run(lambda: stance.simulate_stance(CHAIN, law, HARD, td, t_max_s=0.6,
+                                                           sample_times_s=np.linspace(0, 0.3, 300)))
     per_stance = per_call_us(lambda: stance.simulate_stance(CHAIN, law, HARD, td, t_max_s=0.6,
                                                             sample_times_s=np.linspace(0, 0.3, 300)), 10, args.repeat)
     print(f"equations of motion: closed form {closed:.1f} us, Jacobian sums {summed:.1f} us ({summed / closed:.1f}x); "
           f"accelerations (5 free coordinates) {acc:.1f} us")
     print(f"one stance ({st.duration_s * 1e3:.0f} ms, {st.end_reason}): {per_stance / 1e3:.1f} ms, "
-          f"{calls[0]} right-hand-side evaluations ({per_stance / calls[0]:.0f} us each incl. the solver)")
+          f"{calls} right-hand-side evaluations ({per_stance / calls:.0f} us each incl. the solver)")
     held_out_stance(td, args.repeat)
     print(f"load average (1 min) before {load0:.2f}, after {os.getloadavg()[0]:.2f}; median of {args.repeat} runs")
 
@@ -94,24 +102,16 @@ def held_out_stance(td: stance.TouchdownState, repeat: int) -> None:
 
     law = FittedLaw(ModelSpec(effects=("angle_dependent_stiffness",)),
                     np.array([[301.4, 948.2], [230.9, 884.8], [175.4, 894.8]]))
-    calls = [0]
-    original = stance.accelerations
-
-    def counted(*a, **k):
-        calls[0] += 1
-        return original(*a, **k)
 
     def run():
         return stance.simulate_stance(CHAIN, law, HARD, td, t_max_s=0.6, rtol=fs.RTOL, atol=fs.atol_of(law),
                                       sample_times_s=np.linspace(0, 0.3, 300))
 
-    stance.accelerations = counted
-    st = run()
-    stance.accelerations = original
+    st, calls = counted_run(run)
     ms = per_call_us(run, 10, repeat) / 1e3
     print(f"held-out stance as discover runs it (FittedLaw k0 + k1, {law.n_states} law states, rtol {fs.RTOL:g}, "
           f"atol {fs.ATOL:g} / toe {fs.TOE_ATOL:g}; {st.duration_s * 1e3:.0f} ms, {st.end_reason}): {ms:.1f} ms, "
-          f"{calls[0]} right-hand-side evaluations")
+          f"{calls} right-hand-side evaluations")
 
 
 if __name__ == "__main__":
