@@ -1,7 +1,7 @@
 """Cost of the forward stance simulation, the inner loop of ``discover`` and of every simulated trial.
 
 Prints, on the seed subject's de Leva chain:
-1. one evaluation of the equations of motion, ``dynamics.equations_of_motion`` (closed form,
+1. one evaluation of the equations of motion, ``dynamics.equations_of_motion`` (closed form compiled by numba,
    ``EomConstants``) against the same M, h, Q assembled from the COM Jacobians
    (``sum m J^T J``, the formulation it replaced; test_sim_dynamics checks they agree to 1e-12);
 2. ``dynamics.accelerations`` (one solve of the stance's 5 free coordinates);

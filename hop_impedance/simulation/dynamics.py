@@ -22,11 +22,11 @@ absolute angle), the principle of virtual work gives
 
 where ``dJ_i/dt g' = -sum_{j<i} L_j q_j'^2 e(q_j) - q_i'^2 (a_i e + b_i n)(q_i)``.
 :func:`equations_of_motion` evaluates these sums in closed form, as constant 4 x 4 coefficients of
-``cos(q_k - q_j)`` and ``sin(q_k - q_j)`` (:class:`EomConstants`; 2.2x faster than summing the
-Jacobians, which the tests still do to check it: `bench/bench_stance_dynamics.py`).
-:func:`accelerations`, the stance ODE's inner loop, runs the same closed form compiled by numba
-(``_eom_compiled``, ``_accelerations_compiled``: 44 -> 6 us a call, the stance 1.5x faster, ``discover`` 1.6x;
-``test_sim_dynamics`` checks it against :func:`equations_of_motion` solved by LAPACK).
+``cos(q_k - q_j)`` and ``sin(q_k - q_j)`` (:class:`EomConstants`), compiled by numba (``_eom_compiled``, the one place
+the closed form is written); the tests check it against the Jacobian sums (`bench/bench_stance_dynamics.py` times both).
+:func:`accelerations`, the stance ODE's inner loop, solves the same compiled form (``_accelerations_compiled``:
+44 -> 6 us a call, the stance 1.5x faster, ``discover`` 1.6x; ``test_sim_dynamics`` checks it against
+:func:`equations_of_motion` solved by LAPACK).
 Joint moments M_j are extensor positive and do virtual work ``-M_j d(rho_j)``
 (ankle rho1 = q1 - q2 + alpha, knee rho2 = q3 - q2 + pi, hip rho3 = q3 - q4 + pi),
 so ``Q_joints = -D^T M`` with ``D = d(rho)/dq`` (constant, 3 x 4). The ground
@@ -287,25 +287,15 @@ def equations_of_motion(chain: Chain, g: np.ndarray, gd: np.ndarray) -> tuple[np
     gravity : ndarray, shape (6,)
         Q_gravity (N, N m) on the right-hand side.
     """
-    q, qd = g[2:], gd[2:]
     k = chain.eom_constants  # the closed form of sum_i m_i J_i^T J_i (EomConstants; test_sim_dynamics checks it)
-    c, s = np.cos(q), np.sin(q)
-    diff = q[None, :] - q[:, None]  # [j, k] = q_k - q_j
-    cos_d, sin_d = np.cos(diff), np.sin(diff)
-    w0, w1 = k.first_moments[:, 0], k.first_moments[:, 1]
-    mass = np.zeros((N_COORDS, N_COORDS))
-    mass[0, 0] = mass[1, 1] = k.total_mass_kg
-    mass[0, 2:] = mass[2:, 0] = w0 * c - w1 * s  # R(q_j) w_j, x
-    mass[1, 2:] = mass[2:, 1] = w0 * s + w1 * c  # R(q_j) w_j, z
-    mass[2:, 2:] = k.cos_terms * cos_d + k.sin_terms * sin_d
-    qd2 = qd * qd
-    bias = np.empty(N_COORDS)
-    bias[0] = -(w1 * c + w0 * s) @ qd2  # sum_j R(q_j) J90 w_j qd_j^2
-    bias[1] = (w0 * c - w1 * s) @ qd2
-    bias[2:] = (k.sin_terms * cos_d - k.cos_products * sin_d) @ qd2
+    # One closed form, compiled (_eom_compiled): with no joint moment and no ground force its right-hand side is
+    # Q_gravity - h, and Q_gravity is -g times the body's weight on z and -g times M's z row on the angles.
+    mass, rhs = _eom_compiled(k.cos_terms, k.sin_terms, k.cos_products, k.first_moments, k.total_mass_kg,
+                              chain.gravity_m_s2, np.asarray(g[2:], float), np.asarray(gd[2:], float), np.zeros(3), 0.0, 0.0)
     gravity = np.zeros(N_COORDS)
     gravity[1] = -chain.gravity_m_s2 * k.total_mass_kg
     gravity[2:] = -chain.gravity_m_s2 * mass[1, 2:]
+    bias = gravity - rhs
     return mass, bias, gravity
 
 
@@ -367,7 +357,8 @@ def _eom_compiled(cos_terms, sin_terms, cos_products, w, total_mass, grav, q, qd
     The same closed form (:class:`EomConstants`), written as loops that numba compiles: with the solve,
     :func:`accelerations` went from 43.8 to 5.8 us a call (`bench/bench_stance_dynamics.py`, session 35); it was most
     of the stance ODE's right-hand side, the inner loop of every simulated trial and of ``discover`` (issue 16).
-    ``test_sim_dynamics`` checks it against :func:`equations_of_motion` and :func:`joint_generalized_forces`.
+    :func:`equations_of_motion` calls it with no moment and no ground force, so ``test_sim_dynamics`` checks it
+    against the Jacobian sums there and against :func:`joint_generalized_forces` through :func:`accelerations`.
     """
     mass = np.zeros((6, 6))
     rhs = np.zeros(6)

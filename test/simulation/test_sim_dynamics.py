@@ -195,8 +195,8 @@ def test_closed_form_equations_of_motion_equal_the_jacobian_sums():
                 np.testing.assert_allclose(ours, summed, rtol=0, atol=1e-12 * np.abs(summed).max())
 
 
-def test_compiled_accelerations_equal_the_numpy_equations_solved_by_lapack():
-    """accelerations' compiled kernel (numba, session 35) against M g'' = Q - h assembled from equations_of_motion and
+def test_compiled_accelerations_equal_the_equations_solved_by_lapack():
+    """accelerations' compiled elimination (numba, session 35) against M g'' = Q - h assembled from equations_of_motion and
     joint_generalized_forces and solved by LAPACK's gesv, at random states, moments and forces, in both friction
     modes (toe stuck: x_toe fixed, its constraint force returned; sliding: all six coordinates free)."""
     from scipy.linalg import solve
