@@ -203,6 +203,9 @@ def main() -> None:
                          "the default since the end of session 17")
     ap.add_argument("--no-gate-per-signal", action="store_true",
                     help="stiffness_gate.GATE_PER_SIGNAL = False: the gate of sessions 8-16 (the total gap only)")
+    ap.add_argument("--per-term", action="store_true",
+                    help="forward_selection.PER_TERM = True (session 37's option): the screen also passes a candidate "
+                         "significantly better on one of the gap's ten terms (Bonferroni over them) and worse on none")
     args = ap.parse_args()
     check_two_segment(ap, args, "--simulate-from", args.simulate_from is not None)
     _configure_gate(ap, args)
@@ -253,7 +256,8 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--two-sided-duration", forward_selection, "TWO_SIDED_DURATION", True if args.two_sided_duration else None),
             ("--angle-hold", forward_selection, "ANGLE_HOLD", True if args.angle_hold else None),
             ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
-            ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None)):
+            ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None),
+            ("--per-term", forward_selection, "PER_TERM", True if args.per_term else None)):
         if value is None:
             continue
         if args.scheduler:

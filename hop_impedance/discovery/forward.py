@@ -20,6 +20,9 @@ from hop_impedance.simulation.ground import GroundLaw
 from hop_impedance.simulation.stance_set import RIGID_NO_BOUNCE
 
 GAP_SIGNALS: tuple[str, ...] = ("grf",) + tuple(f"angle_{j}" for j in JOINT_NAMES) + tuple(f"moment_{j}" for j in JOINT_NAMES)
+#: The ten terms of a held-out stance's gap ``G_i`` in order: the sampled signals, then the stance duration, the net
+#: joint work and the flight's plate force (:func:`hop_impedance.discovery.forward_selection.gap_scales`).
+GAP_TERMS: tuple[str, ...] = GAP_SIGNALS + ("duration", "net_work", "flight_force")
 
 
 def ground_of(spec: ModelSpec, s: MeasuredStance) -> GroundLaw:

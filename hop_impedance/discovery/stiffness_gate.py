@@ -511,29 +511,7 @@ def gate(cand: ShotStiffness | HeldOutShot, current: ShotStiffness | HeldOutShot
     out = {"passes": fs.significant(p, shrink, n_candidates), "p_value": p,
            "shrink_against_shot": shrink, "per_stance_log_gap_ratio": np.round(d, 4).tolist(), **cand.as_json()}
     if GATE_PER_SIGNAL and isinstance(cand, HeldOutShot) and isinstance(current, HeldOutShot):
-        per = per_signal_test(current.signal_errors, cand.signal_errors, shrink, n_candidates)
+        per = fs.per_signal_test(current.signal_errors, cand.signal_errors, shrink, n_candidates)
         out["per_signal"] = per
         out["passes"] = bool(out["passes"] or per["passes"])
     return out
-
-
-def per_signal_test(current: np.ndarray, cand: np.ndarray, shrink: float, n_candidates: int) -> dict:
-    """:data:`GATE_PER_SIGNAL`'s test: per sampled signal the held-out stances' log ratios of the mean squared
-    scaled residual (current over candidate; a stance that failed on one side counts as the cap, as in
-    :func:`hop_impedance.discovery.forward_selection.capped`), one-sided t-tests both ways. Passes when some signal's
-    "better" p is below ALPHA / (n_candidates * N_SIGNALS), no signal's "worse" p is below ALPHA, and the pooled
-    total gap shrinks by MIN_SHRINK (``shrink``)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cur = np.where(np.isfinite(current), current, np.inf)
-        can = np.where(np.isfinite(cand), cand, np.inf)
-        d = np.log(cur) - np.log(can)
-    d = np.where(np.isinf(cur) & np.isinf(can), 0.0, d)
-    better = [fs.one_sided_t(fs.capped(d[:, k])) for k in range(N_SIGNALS)]
-    worse = [fs.one_sided_t(-fs.capped(d[:, k])) for k in range(N_SIGNALS)]
-    level = fs.ALPHA / (max(n_candidates, 1) * N_SIGNALS)
-    ok = min(better) < level and min(worse) >= fs.ALPHA and shrink >= fs.MIN_SHRINK
-    return {"passes": bool(ok), "level": level,
-            "signals": {sig: {"p_better": round(b, 6), "p_worse": round(w, 6),
-                              "mean_log_ratio": round(float(np.mean(fs.capped(d[:, k]))), 4),
-                              "per_stance_log_ratio": np.round(d[:, k], 3).tolist()}
-                        for k, (sig, b, w) in enumerate(zip(GAP_SIGNALS, better, worse))}}

@@ -133,10 +133,7 @@ def held_out_runs(ev: fs.HeldOutEvaluator, spec: ModelSpec, effect: str | None, 
     trial = fs.trial_for(spec)
     fitted, _ = identify(spec, trial, trial.stances, effect)
     _factors()[fitted] = [x for _, x, _ in results]
-    return fs.HeldOutRuns(
-        effect=effect, spec=fitted, gaps=np.array([r["gap"] for r in runs]), rms=np.array([r["rms"] for r in runs]),
-        duration_error_s=np.array([r["duration_error_s"] for r in runs]),
-        net_work_j=np.array([r["net_work_j"] for r in runs]), end_reasons=[r["end_reason"] for r in runs],
-        seconds=time.perf_counter() - t0,
-        surface_factors=[{"held_out": list(test), "factors_k_n_d": np.round(np.exp(x), 4).tolist(), "evaluations": e}
-                         for (_, test), (_, x, e) in zip(split, results)])
+    return fs.HeldOutRuns.of(
+        effect, fitted, runs, time.perf_counter() - t0,
+        [{"held_out": list(test), "factors_k_n_d": np.round(np.exp(x), 4).tolist(), "evaluations": e}
+         for (_, test), (_, x, e) in zip(split, results)])

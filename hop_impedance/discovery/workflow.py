@@ -360,7 +360,8 @@ def _scored_round(ev: fs.HeldOutEvaluator, spec: ModelSpec, trial: MeasuredTrial
     timing["rounds"][-1] += time.perf_counter() - t0
     for r in runs:
         timing["per_candidate_s"].setdefault(r.effect, []).append(r.seconds)
-    return fs.defer_energy_effects(fs.score(trial, current, runs), stiffness_gate.screen_factor(factor or len(cands)))
+    screen = stiffness_gate.screen_factor(factor or len(cands))
+    return fs.defer_energy_effects(fs.score(trial, current, runs, screen), screen)
 
 
 def _round_json(scores: list[fs.ForwardScore], n_candidates: int, scales: np.ndarray, gates: dict) -> dict:
@@ -373,6 +374,7 @@ def _round_json(scores: list[fs.ForwardScore], n_candidates: int, scales: np.nda
         "passes": fs.passes(sc, stiffness_gate.screen_factor(n_candidates)) and gates.get(sc.effect, {}).get("passes", True),
         "per_stance_log_gap_ratio": np.round(sc.log_ratios, 4).tolist(),
         "gap_after": sc.runs.figures(scales)["total"], "physics": sc.physics,
+        **({"per_term": sc.per_term} if sc.per_term is not None else {}),
         **({"surface_shot": sc.runs.surface_factors} if sc.runs.surface_factors is not None else {})} for sc in scores}
 
 

@@ -50,7 +50,7 @@ def test_1201_per_signal_test_names_it_on_the_plate_force_and_ankle_moment():
     """Per signal: GRF better in all 8 stances (p 4.6e-7), ankle moment (p 5e-6), both below 0.05 / (8 * 7); no signal
     significantly worse (the hip moment's p_worse 0.14 is the lowest)."""
     cur, cand = _errors()
-    out = sg.per_signal_test(cur, cand, 0.45, 8)
+    out = fs.per_signal_test(cur, cand, 0.45, 8)
     sig = out["signals"]
     assert out["passes"] and out["level"] == pytest.approx(0.05 / 56)
     assert sig["grf"]["p_better"] < 1e-6 and sig["moment_ankle"]["p_better"] < 1e-5
@@ -62,10 +62,10 @@ def test_1201_per_signal_test_names_it_on_the_plate_force_and_ankle_moment():
 
 def test_per_signal_test_needs_no_worse_signal_and_the_shrink_floor():
     cur, cand = _errors()
-    assert not sg.per_signal_test(cur, cand, 0.05, 8)["passes"]  # pooled shrink below MIN_SHRINK
+    assert not fs.per_signal_test(cur, cand, 0.05, 8)["passes"]  # pooled shrink below MIN_SHRINK
     worse = cur.copy()
     worse[:, GAP_SIGNALS.index("moment_hip")] = np.exp(-np.array([0.5, 0.7, 0.4, 0.9, 0.6, 0.8, 0.3, 0.5]))
-    out = sg.per_signal_test(worse, cand, 0.45, 8)
+    out = fs.per_signal_test(worse, cand, 0.45, 8)
     assert out["signals"]["moment_hip"]["p_worse"] < 0.05 and not out["passes"]
 
 
@@ -73,7 +73,7 @@ def test_failed_stance_counts_as_the_cap_and_both_failed_as_a_tie():
     cur, cand = _errors()
     cur[0, 0], cand[1, 0] = np.nan, np.nan  # stance 0: current failed (+cap); stance 1: candidate failed (-cap)
     cur[2, 1] = cand[2, 1] = np.nan
-    d = sg.per_signal_test(cur, cand, 0.45, 8)["signals"]
+    d = fs.per_signal_test(cur, cand, 0.45, 8)["signals"]
     assert d["grf"]["per_stance_log_ratio"][:2] == [np.inf, -np.inf]
     assert d["angle_ankle"]["per_stance_log_ratio"][2] == 0.0
 
@@ -120,9 +120,9 @@ def test_strict_null_47_one_signal_better_is_stopped_by_the_signals_it_makes_wor
     0.05 / 56, but worse on the hip moment (p_worse 0.0021), knee angle (0.030) and knee moment (0.045), and the total
     gap does not shrink (-0.013): not passed. Without the 'worse on none' clause the shrink floor alone stops it."""
     d = np.array([NULL47_LOG_RATIOS[s] for s in GAP_SIGNALS]).T
-    out = sg.per_signal_test(np.exp(d), np.ones_like(d), -0.013, 8)
+    out = fs.per_signal_test(np.exp(d), np.ones_like(d), -0.013, 8)
     sig = out["signals"]
     assert sig["moment_ankle"]["p_better"] < out["level"] and sig["angle_ankle"]["p_better"] < out["level"]
     assert sig["moment_hip"]["p_worse"] == pytest.approx(0.0021, abs=1e-4)
     assert not out["passes"]
-    assert not sg.per_signal_test(np.exp(d), np.ones_like(d), 0.45, 8)["passes"]  # the worse signals alone stop it
+    assert not fs.per_signal_test(np.exp(d), np.ones_like(d), 0.45, 8)["passes"]  # the worse signals alone stop it
