@@ -206,6 +206,9 @@ def main() -> None:
     ap.add_argument("--per-term", action="store_true",
                     help="forward_selection.PER_TERM = True (session 37's option): the screen also passes a candidate "
                          "significantly better on one of the gap's ten terms (Bonferroni over them) and worse on none")
+    ap.add_argument("--gate-eq7-damping", action="store_true",
+                    help="stiffness_gate.GATE_EQ7_DAMPING = True (session 38's option): a damping model's fold laws in "
+                         "the gate identified subject to Eq. 7 (K >= 0, B >= 0 on the training samples)")
     args = ap.parse_args()
     check_two_segment(ap, args, "--simulate-from", args.simulate_from is not None)
     _configure_gate(ap, args)
@@ -257,7 +260,8 @@ def _configure_gate(ap: argparse.ArgumentParser, args: argparse.Namespace) -> No
             ("--angle-hold", forward_selection, "ANGLE_HOLD", True if args.angle_hold else None),
             ("--gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", True if args.gate_per_signal else None),
             ("--no-gate-per-signal", stiffness_gate, "GATE_PER_SIGNAL", False if args.no_gate_per_signal else None),
-            ("--per-term", forward_selection, "PER_TERM", True if args.per_term else None)):
+            ("--per-term", forward_selection, "PER_TERM", True if args.per_term else None),
+            ("--gate-eq7-damping", stiffness_gate, "GATE_EQ7_DAMPING", True if args.gate_eq7_damping else None)):
         if value is None:
             continue
         if args.scheduler:
